@@ -1,0 +1,166 @@
+"""The exploration record: every contact, the path, the layers; saved as JSON and loaded back.
+
+A contact is what the finger reports when a sensor closes (``kind="touch"``, an OFF→ON event)
+or, while it slides along a surface, at the end of each tangential move (``kind="slide"``).
+The sensor that closed gives the unit direction ``r0`` (from the tip centre towards the
+object); the contact point ``r1`` and the tangential plane follow the paper's eq. (6):
+``(r − r1)·r0 = 0``.
+
+Examples
+--------
+>>> c = Contact(step=3, centre=(0.0, -0.012, 0.02), sensors=(7,), direction=(0.0, 1.0, 0.0),
+...             point=(0.0, -0.002, 0.02))
+>>> c.normal
+(-0.0, -1.0, -0.0)
+>>> round(c.plane.offset, 6)
+0.002
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from pathlib import Path
+from typing import Literal
+
+import numpy as np
+from pydantic import BaseModel, ConfigDict, Field, ValidationError
+
+from tactile_kb.errors import RecordError
+
+__all__ = ["Contact", "ExplorationRecord", "Layer", "Plane", "Vec2", "Vec3"]
+
+Vec3 = tuple[float, float, float]
+Vec2 = tuple[float, float]
+
+RECORD_VERSION = 1
+
+
+class Plane(BaseModel):
+    """The plane ``normal · x = offset`` with a unit ``normal`` pointing out of the object."""
+
+    model_config = ConfigDict(frozen=True, extra="forbid")
+
+    normal: Vec3
+    offset: float
+
+    def distance(self, point: Vec3) -> float:
+        """Signed distance of ``point`` from the plane (positive outside)."""
+        return float(np.dot(self.normal, point) - self.offset)
+
+
+class Contact(BaseModel):
+    """One contact between the finger and the object."""
+
+    model_config = ConfigDict(frozen=True, extra="forbid")
+
+    step: int = Field(description="index of the motion at whose end the contact was recorded")
+    centre: Vec3 = Field(description="finger-tip centre, metres")
+    sensors: tuple[int, ...] = Field(description="indices of every sensor ON, in the finger layout")
+    sensor: int = Field(default=-1, description="the sensor followed (the last that closed)")
+    direction: Vec3 = Field(description="r0: unit direction of that sensor, tip centre → object")
+    point: Vec3 = Field(description="r1: the contact point, centre + radius · r0")
+    kind: Literal["touch", "slide"] = "touch"
+    phase: str = Field(default="", description="exploration phase (first-contact, layer, top, …)")
+    layer: int | None = Field(default=None, description="index of the z-layer, if any")
+
+    @property
+    def normal(self) -> Vec3:
+        """The outward normal of the touched surface as the sensor sees it: −r0."""
+        x, y, z = self.direction
+        return (-x, -y, -z)
+
+    @property
+    def plane(self) -> Plane:
+        """The tangential plane of eq. (6), ``(r − r1)·r0 = 0``, with its normal outward."""
+        n = self.normal
+        return Plane(normal=n, offset=float(np.dot(n, self.point)))
+
+
+class Layer(BaseModel):
+    """One horizontal plane z = const of the exploration, with the contour traced in it."""
+
+    model_config = ConfigDict(frozen=True, extra="forbid")
+
+    index: int
+    z: float
+    path: list[Vec3] = Field(default_factory=list, description="tip-centre path in this layer")
+    contour: list[Vec2] = Field(
+        default_factory=list, description="the object's cross-section polygon, counter-clockwise"
+    )
+    closed: bool = Field(default=False, description="the contour returned to its first contact")
+
+
+class ExplorationRecord(BaseModel):
+    """Everything an exploration produced; enough to rebuild the model without exploring again."""
+
+    model_config = ConfigDict(frozen=True, extra="forbid")
+
+    version: int = RECORD_VERSION
+    object: str = ""
+    explorer: str = ""
+    finger: str = Field(default="", description="the finger layout's name")
+    tip_radius: float = Field(default=0.0, description="ρ, metres")
+    sensor_directions: list[Vec3] = Field(default_factory=list)
+    seed: int | None = None
+    params: dict[str, float] = Field(default_factory=dict)
+    contacts: list[Contact] = Field(default_factory=list)
+    path: list[Vec3] = Field(default_factory=list, description="the tip-centre polyline")
+    layers: list[Layer] = Field(default_factory=list)
+    contacts_per_phase: dict[str, int] = Field(default_factory=dict)
+    complete: bool = Field(default=True, description="False when lazy exploration stopped early")
+    notes: list[str] = Field(default_factory=list)
+
+    @property
+    def touches(self) -> int:
+        """Number of touches: sensor OFF→ON events."""
+        return sum(1 for c in self.contacts if c.kind == "touch")
+
+    @property
+    def path_length(self) -> float:
+        """Length of the tip-centre path, metres."""
+        if len(self.path) < 2:
+            return 0.0
+        p = np.asarray(self.path, dtype=float)
+        return float(np.linalg.norm(np.diff(p, axis=0), axis=1).sum())
+
+    def to_json(self, *, indent: int | None = None) -> str:
+        """The record as JSON text."""
+        return self.model_dump_json(indent=indent)
+
+    @classmethod
+    def from_json(cls, text: str, *, file: str = "<string>") -> ExplorationRecord:
+        """Load a record from JSON text; a bad record raises :class:`RecordError` naming ``file``."""
+        try:
+            data = json.loads(text)
+        except json.JSONDecodeError as exc:
+            raise RecordError(f"{file}:{exc.lineno}:{exc.colno}: not JSON: {exc.msg}") from None
+        try:
+            rec = cls.model_validate(data)
+        except ValidationError as exc:
+            err = exc.errors(include_url=False)[0]
+            where = ".".join(str(p) for p in err["loc"])
+            raise RecordError(f"{file}: {where}: {err['msg']}") from None
+        if rec.version != RECORD_VERSION:
+            raise RecordError(f"{file}: version {rec.version} is not supported")
+        for c in rec.contacts:
+            if not all(math.isfinite(v) for v in (*c.centre, *c.direction, *c.point)):
+                raise RecordError(f"{file}: contact at step {c.step} has a non-finite coordinate")
+        return rec
+
+    def save(self, path: str | Path) -> None:
+        """Write the record to ``path`` atomically (a temporary file, then a rename)."""
+        p = Path(path)
+        tmp = p.with_name(p.name + ".tmp")
+        tmp.write_text(self.to_json(indent=1), encoding="utf-8")
+        tmp.replace(p)
+
+    @classmethod
+    def load(cls, path: str | Path) -> ExplorationRecord:
+        """Read a record saved by :meth:`save`."""
+        p = Path(path)
+        try:
+            text = p.read_text(encoding="utf-8")
+        except OSError as exc:
+            raise RecordError(f"{p}: cannot read: {exc.strerror or exc}") from None
+        return cls.from_json(text, file=str(p))
