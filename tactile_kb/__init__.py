@@ -45,4 +45,5 @@ __all__ = [
     "TactileKBError",
     "UsageError",
     "__version__",
+    "builtin_finger",
 ]

@@ -115,5 +115,7 @@ def builtin_finger(name: str, *, radius: float | None = None) -> Finger:
         finger = BUILTIN_LAYOUTS[name]()
     except KeyError:
         known = ", ".join(sorted(BUILTIN_LAYOUTS))
-        raise UsageError(f"unknown finger layout {name!r} (built-in: {known}, or a YAML file)") from None
+        raise UsageError(
+            f"unknown finger layout {name!r} (built-in: {known}, or a YAML file)"
+        ) from None
     return finger if radius is None else finger.model_copy(update={"radius": radius})

@@ -101,9 +101,12 @@ class Source:
     ) -> Problem:
         """A :class:`Problem` located at ``path`` (or at ``offset`` inside its scalar)."""
         p = tuple(path)
-        line, col = self.locate_in_scalar(p, offset) if offset is not None else self.locate(p, key=key)
-        sev = "warning" if severity == "warning" else "error"
-        return Problem(self.file, line, col, format_path(p), message, sev)
+        line, col = (
+            self.locate_in_scalar(p, offset) if offset is not None else self.locate(p, key=key)
+        )
+        if severity == "warning":
+            return Problem(self.file, line, col, format_path(p), message, "warning")
+        return Problem(self.file, line, col, format_path(p), message)
 
     def excerpt(self, line: int, column: int, context: int = 1) -> str:
         """A numbered excerpt of the source around ``line`` with a caret under ``column``."""
@@ -152,7 +155,9 @@ def load_yaml(
         try:
             text = source.read_text(encoding="utf-8")
         except OSError as exc:
-            raise error_cls([Problem(name, 0, 0, "", f"cannot read: {exc.strerror or exc}")]) from None
+            raise error_cls(
+                [Problem(name, 0, 0, "", f"cannot read: {exc.strerror or exc}")]
+            ) from None
         except UnicodeDecodeError as exc:
             raise error_cls([Problem(name, 0, 0, "", f"not UTF-8 text: {exc.reason}")]) from None
     else:
@@ -163,7 +168,9 @@ def load_yaml(
         mark = exc.problem_mark or exc.context_mark
         line, col = (mark.line + 1, mark.column + 1) if mark else (0, 0)
         msg = f"YAML syntax error: {exc.problem or exc.context}"
-        raise error_cls([Problem(name, line, col, "", msg)], render_excerpt(text, line, col)) from None
+        raise error_cls(
+            [Problem(name, line, col, "", msg)], render_excerpt(text, line, col)
+        ) from None
     except yaml.YAMLError as exc:  # pragma: no cover - composer errors are all marked
         raise error_cls([Problem(name, 0, 0, "", f"YAML error: {exc}")]) from None
     builder = _Builder(name)
@@ -254,10 +261,9 @@ def validate(source: Source, model: type[M], *, error_cls: type[SourceError] = S
             path: list[str | int] = []
             node: Any = source.data
             for part in loc:
-                if isinstance(node, dict) and isinstance(part, str) and part in node:
-                    path.append(part)
-                    node = node[part]
-                elif isinstance(node, list) and isinstance(part, int) and 0 <= part < len(node):
+                in_dict = isinstance(node, dict) and isinstance(part, str) and part in node
+                in_list = isinstance(node, list) and isinstance(part, int) and 0 <= part < len(node)
+                if in_dict or in_list:
                     path.append(part)
                     node = node[part]
                 elif err["type"] in ("extra_forbidden", "missing"):
