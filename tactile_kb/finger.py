@@ -1,4 +1,4 @@
-"""The finger: a hemispherical tip of radius ρ carrying on/off pressure sensors.
+r"""The finger: a hemispherical tip of radius ρ carrying on/off pressure sensors.
 
 Each sensor sits at a unit direction on the tip (pointing from the tip centre outwards, the
 tip points down, −z) and fires when the direction of a contact from the tip centre lies
@@ -8,7 +8,13 @@ inside its acceptance cone. Two built-in layouts follow the paper's prototypes:
   parallelepipeds);
 * ``"33"``: 33 sensors at the cross-points of meridians and parallels: the pole, 8 on the
   parallel 60° below the equator, 12 on the parallel 30° below, and 12 on the equator, i.e.
-  30° apart, so that plane surfaces 30° apart are told apart.
+  30° apart, so that plane surfaces 30° apart are told apart. Their cones (21°) cover the
+  whole lower hemisphere (the largest angle to the nearest sensor there is 20.7°).
+
+Custom layouts load from YAML (:func:`load_layout`) with located errors
+(:class:`~tactile_kb.errors.LayoutFileError`), and :func:`coverage` reports, for a layout,
+the largest angle between a surface's contact direction and the sensor that fires for it,
+and the directions where none fires.
 
 Examples
 --------
@@ -17,20 +23,36 @@ Examples
 (0,)
 >>> len(builtin_finger("33").directions)
 33
+>>> f = load_layout("name: two\ncone_deg: 30\nsensors:\n  - [1, 0, 0]\n  - {elevation: -90, azimuth: 0}\n")
+>>> [tuple(round(c, 3) for c in d) for d in f.directions]
+[(1.0, 0.0, 0.0), (0.0, 0.0, -1.0)]
 """
 
 from __future__ import annotations
 
 import math
 from collections.abc import Iterable, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Annotated
 
 import numpy as np
 from numpy.typing import NDArray
 from pydantic import BaseModel, ConfigDict, Field, field_validator
 
-from tactile_kb.errors import UsageError
+from tactile_kb.errors import LayoutFileError, Problem, UsageError
+from tactile_kb.yaml_source import format_path, load_yaml, validate
 
-__all__ = ["BUILTIN_LAYOUTS", "DEFAULT_TIP_RADIUS", "Finger", "builtin_finger"]
+__all__ = [
+    "BUILTIN_LAYOUTS",
+    "DEFAULT_TIP_RADIUS",
+    "Coverage",
+    "Finger",
+    "builtin_finger",
+    "coverage",
+    "load_finger",
+    "load_layout",
+]
 
 Vec3 = tuple[float, float, float]
 
@@ -103,7 +125,7 @@ def _layout_33() -> Finger:
     dirs += _ring(-60.0, 8)
     dirs += _ring(-30.0, 12)
     dirs += _ring(0.0, 12)
-    return Finger(name="33", directions=tuple(dirs), cone_deg=20.0)
+    return Finger(name="33", directions=tuple(dirs), cone_deg=21.0)
 
 
 BUILTIN_LAYOUTS = {"4": _layout_4, "33": _layout_33}
@@ -119,3 +141,213 @@ def builtin_finger(name: str, *, radius: float | None = None) -> Finger:
             f"unknown finger layout {name!r} (built-in: {known}, or a YAML file)"
         ) from None
     return finger if radius is None else finger.model_copy(update={"radius": radius})
+
+
+# --- custom layouts from YAML ----------------------------------------------------------------
+
+
+class _Angles(BaseModel):
+    model_config = ConfigDict(extra="forbid")
+
+    elevation: float = Field(ge=-90.0, le=90.0, description="degrees above the equator")
+    azimuth: float = Field(description="degrees from +x towards +y")
+
+
+class _Ring(BaseModel):
+    model_config = ConfigDict(extra="forbid")
+
+    elevation: float = Field(ge=-90.0, le=90.0)
+    count: int = Field(ge=1, le=360)
+    phase: float = 0.0
+
+
+class _LayoutFile(BaseModel):
+    model_config = ConfigDict(extra="forbid")
+
+    name: str = Field(min_length=1)
+    description: str = ""
+    radius: float = Field(default=DEFAULT_TIP_RADIUS, gt=0.0, le=0.1)
+    cone_deg: float = Field(gt=0.0, lt=90.0)
+    sensors: list[Annotated[list[float], Field(min_length=3, max_length=3)] | _Angles] = Field(
+        default_factory=list
+    )
+    rings: list[_Ring] = Field(default_factory=list)
+
+
+def load_layout(source: str | Path, *, file: str | None = None) -> Finger:
+    """A finger layout from a YAML file (a ``Path``) or YAML text (a ``str``).
+
+    The file gives ``name``, ``cone_deg`` (half-angle of every acceptance cone), optionally
+    ``radius`` (ρ, metres, default 0.005) and ``description``, and the sensors: ``sensors``, a
+    list of unit vectors ``[x, y, z]`` (tip centre outwards; normalised on load) or
+    ``{elevation, azimuth}`` in degrees, and/or ``rings``, each ``{elevation, count, phase}``
+    (``count`` sensors evenly spaced in azimuth starting at ``phase``). Every problem is
+    reported with its ``file:line:column`` in one :class:`~tactile_kb.errors.LayoutFileError`.
+    """
+    src = load_yaml(source, file=file, error_cls=LayoutFileError)
+    if not isinstance(src.data, dict):
+        raise LayoutFileError(
+            [
+                Problem(
+                    src.file,
+                    1,
+                    1,
+                    "",
+                    "a layout file must be a mapping with name, cone_deg, sensors",
+                )
+            ]
+        )
+    spec = validate(src, _LayoutFile, error_cls=LayoutFileError)
+    dirs: list[Vec3] = []
+    origin: list[tuple[str | int, ...]] = []  # where each direction came from in the file
+    problems: list[Problem] = []
+    for i, item in enumerate(spec.sensors):
+        if isinstance(item, _Angles):
+            dirs += _ring(item.elevation, 1, item.azimuth)
+            origin.append(("sensors", i))
+            continue
+        n = math.sqrt(sum(c * c for c in item))
+        if not math.isfinite(n) or n < 1e-9:
+            problems.append(
+                src.problem(("sensors", i), "a sensor direction needs a non-zero length")
+            )
+            continue
+        dirs.append((item[0] / n, item[1] / n, item[2] / n))
+        origin.append(("sensors", i))
+    for r, ring in enumerate(spec.rings):
+        dirs += _ring(ring.elevation, ring.count, ring.phase)
+        origin += [("rings", r)] * ring.count
+    if not dirs and not problems:
+        problems.append(
+            src.problem(("sensors",), "a finger needs at least one sensor (sensors or rings)")
+        )
+    seen: dict[tuple[float, float, float], tuple[str | int, ...]] = {}
+    for d, where in zip(dirs, origin, strict=True):
+        key = (round(d[0], 9) + 0.0, round(d[1], 9) + 0.0, round(d[2], 9) + 0.0)
+        if key in seen:
+            problems.append(src.problem(where, f"the same direction as {format_path(seen[key])}"))
+        seen.setdefault(key, where)
+    if problems:
+        first = min(problems, key=lambda p: (p.line, p.column))
+        raise LayoutFileError(problems, src.excerpt(first.line, first.column))
+    return Finger(
+        name=spec.name, radius=spec.radius, directions=tuple(dirs), cone_deg=spec.cone_deg
+    )
+
+
+def load_finger(finger: Finger | str | Path, *, radius: float | None = None) -> Finger:
+    """A :class:`Finger`, a built-in layout name (``"4"``, ``"33"``) or a layout YAML file."""
+    if isinstance(finger, Finger):
+        out = finger
+    elif isinstance(finger, str) and finger in BUILTIN_LAYOUTS:
+        out = builtin_finger(finger)
+    else:
+        path = Path(finger)
+        if not path.exists():
+            known = ", ".join(sorted(BUILTIN_LAYOUTS))
+            raise UsageError(
+                f"unknown finger {str(finger)!r} (built-in: {known}, or a YAML layout file)"
+            )
+        out = load_layout(path)
+    return out if radius is None else out.model_copy(update={"radius": radius})
+
+
+# --- coverage ---------------------------------------------------------------------------------
+
+
+def _sphere_points(n: int) -> NDArray[np.float64]:
+    i = np.arange(n) + 0.5
+    polar = np.arccos(1.0 - 2.0 * i / n)
+    az = math.pi * (1.0 + math.sqrt(5.0)) * i
+    pts: NDArray[np.float64] = np.c_[
+        np.cos(az) * np.sin(polar), np.sin(az) * np.sin(polar), np.cos(polar)
+    ]
+    return pts
+
+
+@dataclass(frozen=True)
+class Coverage:
+    """How well a layout's cones cover contact directions up to ``max_elevation_deg``.
+
+    Attributes
+    ----------
+    finger
+        The layout's name.
+    max_elevation_deg
+        The region examined: contact directions (tip centre → contact) whose elevation is at
+        most this (−90 is straight down; 0 the lower hemisphere).
+    max_error_deg
+        The largest angle between a direction that fires and the nearest sensor firing for
+        it: the worst quantisation of a surface normal.
+    covering_radius_deg
+        The largest angle from any direction in the region to its nearest sensor.
+    uncovered_fraction
+        The fraction of the region (by area) where no sensor fires.
+    gaps
+        The directions where none fires, grouped: ``(elevation_deg, azimuth_deg, size_deg)``
+        per group, the largest first (``size_deg`` is the group's angular radius).
+    """
+
+    finger: str
+    max_elevation_deg: float
+    max_error_deg: float
+    covering_radius_deg: float
+    uncovered_fraction: float
+    gaps: tuple[tuple[float, float, float], ...]
+
+    @property
+    def complete(self) -> bool:
+        """Whether every direction of the region fires at least one sensor."""
+        return not self.gaps
+
+
+def coverage(finger: Finger, *, max_elevation_deg: float = 0.0, samples: int = 40000) -> Coverage:
+    """The coverage report of ``finger`` over contact directions up to ``max_elevation_deg``.
+
+    Directions are sampled uniformly (a Fibonacci sphere of ``samples`` points); the angles are
+    exact for the samples, so their resolution is about ``sqrt(41253 / samples)`` degrees.
+
+    Examples
+    --------
+    >>> c = coverage(builtin_finger("33"))
+    >>> c.complete, round(c.covering_radius_deg, 1)
+    (True, 20.6)
+    >>> c4 = coverage(builtin_finger("4"))
+    >>> c4.complete, c4.gaps[0][0] < -40
+    (False, True)
+    """
+    pts = _sphere_points(samples)
+    elev = np.degrees(np.arcsin(np.clip(pts[:, 2], -1.0, 1.0)))
+    pts = pts[elev <= max_elevation_deg + 1e-9]
+    cos = np.clip(pts @ finger.matrix.T, -1.0, 1.0)
+    best = cos.max(axis=1)
+    covering = float(np.degrees(np.arccos(best.max() if len(best) == 0 else best.min())))
+    fires = best >= finger.cos_cone - 1e-12
+    err = float(np.degrees(np.arccos(best[fires].min()))) if fires.any() else 0.0
+    gaps: list[tuple[float, float, float]] = []
+    miss = pts[~fires]
+    if len(miss):
+        spacing = math.sqrt(4.0 * math.pi / samples) * 2.5
+        if len(miss) == 1:
+            labels = np.array([1])
+        else:
+            from scipy.cluster.hierarchy import fcluster, linkage
+
+            labels = fcluster(linkage(miss, method="single"), t=spacing, criterion="distance")
+        for lab in np.unique(labels):
+            grp = miss[labels == lab]
+            c = grp.mean(axis=0)
+            c /= np.linalg.norm(c)
+            size = float(np.degrees(np.arccos(np.clip(grp @ c, -1.0, 1.0)).max()))
+            e = float(np.degrees(np.arcsin(np.clip(c[2], -1.0, 1.0))))
+            a = float(np.degrees(np.arctan2(c[1], c[0]))) % 360.0
+            gaps.append((round(e, 1), round(a, 1), round(size, 1)))
+        gaps.sort(key=lambda g: -g[2])
+    return Coverage(
+        finger=finger.name,
+        max_elevation_deg=max_elevation_deg,
+        max_error_deg=err,
+        covering_radius_deg=covering,
+        uncovered_fraction=float((~fires).mean()) if len(fires) else 0.0,
+        gaps=tuple(gaps),
+    )

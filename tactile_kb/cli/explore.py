@@ -1,10 +1,184 @@
-"""Subcommands of ``tactile-kb`` (being built; see tactile_kb/cli/__init__.py)."""
+"""Subcommands that touch objects: ``classify``, ``explore``, ``demo``, ``plugins``."""
 
 from __future__ import annotations
 
 import argparse
+import json
+import math
+import sys
+from pathlib import Path
 from typing import Any
+
+from tactile_kb.errors import TactileKBError, UsageError
+from tactile_kb.explorers import explorer_registry, get_explorer
+from tactile_kb.features import feature_registry
+from tactile_kb.finger import load_finger
+from tactile_kb.pipeline import Classification, classify, classify_record, knowledge_base
+from tactile_kb.record import ExplorationRecord
+
+__all__ = ["register"]
+
+
+def _sigma(text: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"not a number of metres: {text!r}") from None
+    if not math.isfinite(value) or value < 0:
+        raise argparse.ArgumentTypeError(f"must be a finite number ≥ 0, got {text!r}")
+    return value
+
+
+def _exploration_options(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--explorer", default="stepper", help="explorer plugin (default: stepper)")
+    p.add_argument(
+        "--finger", default="33", help="finger layout: 4, 33 or a YAML file (default: 33)"
+    )
+    p.add_argument(
+        "--noise",
+        type=_sigma,
+        default=0.0,
+        metavar="SIGMA_METRES",
+        help="σ of the contact-position noise, metres (default: 0)",
+    )
+    p.add_argument("--seed", type=int, default=0, help="seed for noise and drop-outs (default: 0)")
 
 
 def register(sub: argparse._SubParsersAction[Any]) -> None:
-    """Add this module's subcommands to ``sub``."""
+    """Add ``classify``, ``explore``, ``demo`` and ``plugins``."""
+    p = sub.add_parser("classify", help="explore objects by touch and name them")
+    p.add_argument("paths", nargs="*", metavar="PATH", help="mesh files (STL, OBJ, PLY), metres")
+    p.add_argument(
+        "--record",
+        action="append",
+        default=[],
+        metavar="RECORD.json",
+        help="classify a saved exploration record instead (repeatable)",
+    )
+    p.add_argument(
+        "--rules",
+        default="parallelepipeds",
+        help="rule set name or YAML file (default: parallelepipeds)",
+    )
+    _exploration_options(p)
+    p.add_argument("--json", action="store_true", help="one JSON object per line and per object")
+    p.add_argument("--plot", metavar="FILE", help="draw what the finger found (PNG or SVG)")
+    p.set_defaults(func=_classify)
+
+    p = sub.add_parser("explore", help="explore one object and save the record")
+    p.add_argument("path", metavar="PATH")
+    p.add_argument("--out", required=True, metavar="RECORD.json")
+    _exploration_options(p)
+    p.set_defaults(func=_explore)
+
+    p = sub.add_parser("demo", help="the paper's Fig. 5: twelve objects explored and named")
+    p.add_argument("--explorer", default="stepper", help="explorer plugin (default: stepper)")
+    p.add_argument("--json", action="store_true", help="one JSON object per line")
+    p.set_defaults(func=_demo)
+
+    p = sub.add_parser(
+        "plugins", help="list explorers and feature extractors and whether they load"
+    )
+    p.set_defaults(func=_plugins)
+
+
+def _plot_path(base: str, index: int, count: int, name: str) -> Path:
+    path = Path(base)
+    if count == 1:
+        return path
+    stem = Path(name).stem or f"object{index}"
+    return path.with_name(f"{path.stem}-{stem}{path.suffix}")
+
+
+def _emit(result: Classification, as_json: bool) -> None:
+    if as_json:
+        print(json.dumps(result.summary()), flush=True)
+    else:
+        print(f"{result.object}- {result.decision.answer}", flush=True)
+
+
+def _classify(args: argparse.Namespace) -> int:
+    if not args.paths and not args.record:
+        raise UsageError("classify needs at least one PATH or --record RECORD.json")
+    if args.plot and Path(args.plot).suffix.lower() not in (".png", ".svg"):
+        raise UsageError(f"--plot {args.plot}: the file must end in .png or .svg")
+    # Everything shared by the objects is checked before the first one is touched.
+    kb = knowledge_base(args.rules)
+    explorer = get_explorer(args.explorer) if args.paths else None
+    finger = load_finger(args.finger)
+    total = len(args.paths) + len(args.record)
+    failed = 0
+    items: list[tuple[str, bool]] = [(p, False) for p in args.paths] + [
+        (r, True) for r in args.record
+    ]
+    for index, (item, is_record) in enumerate(items):
+        try:
+            if is_record:
+                result = classify_record(ExplorationRecord.load(item), rules=kb)
+            else:
+                assert explorer is not None
+                result = classify(
+                    item,
+                    rules=kb,
+                    explorer=explorer,
+                    finger=finger,
+                    noise=args.noise,
+                    seed=args.seed,
+                )
+            if args.plot:
+                from tactile_kb.plot import plot_classification
+
+                plot_classification(result, _plot_path(args.plot, index, total, item))
+        except TactileKBError as exc:
+            failed += 1
+            print(f"tactile-kb: error: {item}: {exc}", file=sys.stderr, flush=True)
+            continue
+        _emit(result, args.json)
+    return 1 if failed else 0
+
+
+def _explore(args: argparse.Namespace) -> int:
+    out = Path(args.out)
+    if not out.parent.exists():
+        raise UsageError(f"--out {args.out}: directory {str(out.parent)!r} does not exist")
+    explorer = get_explorer(args.explorer)
+    record = explorer.explore(
+        args.path, finger=load_finger(args.finger), seed=args.seed, noise=args.noise
+    )
+    record.save(out)
+    print(
+        f"{args.path}: {record.touches} touches, {len(record.contacts)} contacts, "
+        f"path {record.path_length:.3f} m → {out}"
+    )
+    return 0
+
+
+def _demo(args: argparse.Namespace) -> int:
+    from tactile_kb.solids import fig5_objects
+
+    kb = knowledge_base("parallelepipeds")
+    explorer = get_explorer(args.explorer)
+    failed = 0
+    for name, mesh, _expected in fig5_objects():
+        try:
+            result = classify(mesh, rules=kb, explorer=explorer, finger="33", seed=0)
+        except TactileKBError as exc:
+            failed += 1
+            print(f"tactile-kb: error: {name}: {exc}", file=sys.stderr, flush=True)
+            continue
+        if args.json:
+            print(json.dumps({**result.summary(), "object": name}), flush=True)
+        else:
+            print(f"{name}- {result.decision.answer}", flush=True)
+    return 1 if failed else 0
+
+
+def _plugins(args: argparse.Namespace) -> int:
+    from tactile_kb.explorers import available_explorers
+
+    available_explorers()  # registers the built-in in an uninstalled checkout
+    for kind, registry in (("explorer", explorer_registry), ("feature", feature_registry())):
+        for status in registry.status():
+            state = "ok" if status.ok else f"unavailable: {status.reason}; install: {status.hint}"
+            print(f"{kind:8} {status.name:30} {state}")
+    return 0

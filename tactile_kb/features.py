@@ -1,0 +1,534 @@
+"""Feature extractors: the geometric facts that decide the propositions of a rule file.
+
+"Computer calculations give other information, such as cross-sections, angles between
+planes, existence of parallelism and perpendicularity, etc., which form propositions for
+object identifications." A feature is a function ``fn(model, **params) -> bool`` of an
+:class:`~tactile_kb.model.ObjectModel`; rule files name it (``feature: surface_plane`` or
+``feature: {name: face_count, params: {equals: 6}}``).
+
+Features live in a registry filled from the entry-point group ``tactile_kb.features``; the
+built-ins join it the same way (``builtin = "tactile_kb.features:BUILTIN_FEATURES"``), and a
+third-party package adds its own by exposing a :class:`Feature` (or a mapping of them).
+
+Every threshold is a keyword parameter with a default that works for the 33-sensor finger
+(normals refined from the tip centres are within about 2° of the truth):
+
+=============================  ==================================================  =========
+parameter                      meaning                                              default
+=============================  ==================================================  =========
+``tolerance_deg``              angle below which two directions count as equal      5°
+``sigmas``                     faces' normal uncertainties widen the tolerance:     3
+                               ``max(tolerance_deg, sigmas·√(u₁² + u₂²))``
+``residual_tol``               RMS misfit (m) of a face's contacts meaning curved   1.5 mm
+``smooth_deg``                 edges whose normals differ by less are "smooth"      35°
+``min_smooth_edges``           that many smooth edges mean curved                   6
+``rel_tol``                    relative spread of lengths counted as equal          0.08
+``point_tol``                  RMS miss distance of concurrent lines / diameter     0.05
+``horizontal_deg``             a face within this of ±z is the base or the top      10°
+=============================  ==================================================  =========
+
+The "lateral" edges are those not on the base (the table face) nor on a top face (normal
+within ``horizontal_deg`` of +z): the vertical edges of a prism, the edges to a pyramid's apex.
+
+Examples
+--------
+>>> from tactile_kb.finger import builtin_finger
+>>> from tactile_kb.model import build_model
+>>> from tactile_kb.solids import box
+>>> from tactile_kb.synthetic import sample_record
+>>> model = build_model(sample_record(box(0.08, 0.08, 0.08), builtin_finger("33"), per_face=12, seed=4))
+>>> [get_feature(n).fn(model) for n in ("contact", "surface_plane", "lateral_edges_parallel", "equal_edges")]
+[True, True, True, True]
+>>> get_feature("face_count").fn(model, equals=6), side_count(model)
+(True, 4)
+>>> check_binding("face_count", {"equal": 6})
+"feature 'face_count' has no parameter 'equal' (parameters: equals, max, min)"
+"""
+
+from __future__ import annotations
+
+import inspect
+import math
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass, field
+from importlib.metadata import entry_points
+from typing import Any, Literal
+
+import numpy as np
+from numpy.typing import NDArray
+
+from tactile_kb.errors import GeometryError, PluginError, UsageError
+from tactile_kb.model import ObjectModel
+from tactile_kb.plugins import Registry
+from tactile_kb.polyhedron import Polyhedron
+from tactile_kb.sections import cross_section
+
+__all__ = [
+    "BUILTIN_FEATURES",
+    "Feature",
+    "available_features",
+    "check_binding",
+    "evaluate_feature",
+    "face_angles",
+    "feature_registry",
+    "get_feature",
+    "lateral_common_point",
+    "lateral_edges",
+    "parallelism_table",
+    "perpendicularity_table",
+    "section_at",
+    "side_count",
+]
+
+FloatArray = NDArray[np.float64]
+FeatureFn = Callable[..., bool]
+
+TOLERANCE_DEG = 5.0
+SIGMAS = 3.0
+RESIDUAL_TOL = 0.0015
+SMOOTH_DEG = 35.0
+MIN_SMOOTH_EDGES = 6
+REL_TOL = 0.08
+POINT_TOL = 0.05
+HORIZONTAL_DEG = 10.0
+
+
+@dataclass(frozen=True)
+class Feature:
+    """A registered feature extractor.
+
+    Attributes
+    ----------
+    name
+        The name rule files use.
+    fn
+        ``fn(model, **params) -> bool``.
+    requires
+        ``"contact"`` (only the record's contacts) or ``"model"`` (a closed polyhedron).
+    doc
+        One-line description.
+    params
+        Keyword parameters and their defaults (``None``: no default, optional).
+    """
+
+    name: str
+    fn: FeatureFn
+    requires: Literal["contact", "model"] = "model"
+    doc: str = ""
+    params: Mapping[str, Any] = field(default_factory=dict)
+
+    def __call__(self, model: ObjectModel, **params: Any) -> bool:
+        return evaluate_feature(self, model, params)
+
+
+# ---------------------------------------------------------------------------------------------
+# geometry helpers (values, not booleans)
+
+
+def _poly(model: ObjectModel, name: str) -> Polyhedron:
+    if model.polyhedron is None:
+        reason = model.open_reason or "no polyhedron"
+        raise GeometryError(f"feature {name!r} needs a closed model: {reason}")
+    return model.polyhedron
+
+
+def _uncertainty(model: ObjectModel) -> FloatArray:
+    """Per polyhedron face, the normal uncertainty (degrees) of its model face."""
+    if not model.face_of:
+        return np.zeros(0)
+    return np.asarray([model.faces[i].normal_uncertainty_deg for i in model.face_of], dtype=float)
+
+
+def _tolerance(model: ObjectModel, tolerance_deg: float, sigmas: float) -> FloatArray:
+    """(F, F) angle tolerances: the larger of ``tolerance_deg`` and the combined uncertainty."""
+    u = _uncertainty(model)
+    comb = np.sqrt(u[:, None] ** 2 + u[None, :] ** 2)
+    return np.asarray(np.maximum(tolerance_deg, sigmas * comb), dtype=float)
+
+
+def face_angles(model: ObjectModel) -> FloatArray:
+    """(F, F) angles between the outward normals of the polyhedron's faces, degrees.
+
+    0 for the same direction, 180 for parallel faces on opposite sides, 90 for
+    perpendicular ones.
+    """
+    p = _poly(model, "face_angles")
+    c = np.clip(p.normals @ p.normals.T, -1.0, 1.0)
+    return np.asarray(np.degrees(np.arccos(c)), dtype=float)
+
+
+def parallelism_table(
+    model: ObjectModel, *, tolerance_deg: float = TOLERANCE_DEG, sigmas: float = SIGMAS
+) -> NDArray[np.bool_]:
+    """(F, F) True where two faces are parallel (opposite normals within the tolerance)."""
+    ang = face_angles(model)
+    return np.asarray(180.0 - ang <= _tolerance(model, tolerance_deg, sigmas), dtype=bool)
+
+
+def perpendicularity_table(
+    model: ObjectModel, *, tolerance_deg: float = TOLERANCE_DEG, sigmas: float = SIGMAS
+) -> NDArray[np.bool_]:
+    """(F, F) True where two faces are perpendicular within the tolerance."""
+    ang = face_angles(model)
+    return np.asarray(np.abs(ang - 90.0) <= _tolerance(model, tolerance_deg, sigmas), dtype=bool)
+
+
+def _base_top(p: Polyhedron, horizontal_deg: float) -> tuple[set[int], set[int]]:
+    c = math.cos(math.radians(horizontal_deg))
+    base = {i for i in range(len(p.faces)) if p.normals[i, 2] <= -c}
+    top = {i for i in range(len(p.faces)) if p.normals[i, 2] >= c}
+    return base, top
+
+
+def lateral_edges(
+    model: ObjectModel, *, horizontal_deg: float = HORIZONTAL_DEG
+) -> list[tuple[int, int]]:
+    """Edges (vertex index pairs) on neither the base nor a top face."""
+    p = _poly(model, "lateral_edges")
+    base, top = _base_top(p, horizontal_deg)
+    cap = base | top
+    return [
+        e for e, (f, g) in zip(p.edges, p.edge_faces, strict=True) if f not in cap and g not in cap
+    ]
+
+
+def side_count(model: ObjectModel, *, horizontal_deg: float = HORIZONTAL_DEG) -> int:
+    """Number of lateral faces (neither base nor top): n of an n-gonal prism, pyramid, frustum."""
+    p = _poly(model, "side_count")
+    base, top = _base_top(p, horizontal_deg)
+    return len(p.faces) - len(base | top)
+
+
+def _lateral_lines(model: ObjectModel, horizontal_deg: float) -> tuple[FloatArray, FloatArray]:
+    p = _poly(model, "lateral edges")
+    edges = lateral_edges(model, horizontal_deg=horizontal_deg)
+    e = np.asarray(edges, dtype=int).reshape(-1, 2)
+    a = p.vertices[e[:, 0]]
+    d = p.vertices[e[:, 1]] - a
+    d = d / np.linalg.norm(d, axis=1)[:, None]
+    return a, d
+
+
+def lateral_common_point(
+    model: ObjectModel, *, horizontal_deg: float = HORIZONTAL_DEG
+) -> tuple[FloatArray, float] | None:
+    """Least-squares common point of the lateral edge lines and its RMS miss distance (m).
+
+    ``p = (Σ(I − ddᵀ))⁻¹ Σ(I − ddᵀ)a``; None when there are fewer than two lateral edges or
+    the lines are (nearly) parallel, so that no finite point is determined.
+    """
+    a, d = _lateral_lines(model, horizontal_deg)
+    if len(a) < 2:
+        return None
+    proj = np.eye(3)[None, :, :] - d[:, :, None] * d[:, None, :]
+    m = proj.sum(axis=0)
+    if np.linalg.cond(m) > 1e6:
+        return None
+    point = np.linalg.solve(m, np.einsum("kij,kj->i", proj, a))
+    miss = np.einsum("kij,kj->ki", proj, point[None, :] - a)
+    return point, float(np.sqrt((miss**2).sum(axis=1).mean()))
+
+
+def section_at(model: ObjectModel, z: float) -> FloatArray:
+    """The cross-section polygon (k, 2) of the polyhedron at height ``z`` (counter-clockwise)."""
+    return cross_section(_poly(model, "section_at"), z)
+
+
+# ---------------------------------------------------------------------------------------------
+# boolean extractors
+
+
+def contact(model: ObjectModel) -> bool:
+    """There is contact between the object and the finger."""
+    return len(model.record.contacts) > 0
+
+
+def surface_curved(
+    model: ObjectModel,
+    *,
+    residual_tol: float = RESIDUAL_TOL,
+    smooth_deg: float = SMOOTH_DEG,
+    min_smooth_edges: int = MIN_SMOOTH_EDGES,
+) -> bool:
+    """The surface is curved: a face's contacts do not fit one plane, or many smooth edges."""
+    if any(f.refined and f.residual > residual_tol for f in model.faces):
+        return True
+    p = model.polyhedron
+    if p is None:
+        return False
+    ef = np.asarray(p.edge_faces, dtype=int).reshape(-1, 2)
+    cos = np.einsum("ij,ij->i", p.normals[ef[:, 0]], p.normals[ef[:, 1]])
+    smooth = int((cos > math.cos(math.radians(smooth_deg))).sum())
+    return smooth >= min_smooth_edges
+
+
+def surface_plane(
+    model: ObjectModel,
+    *,
+    residual_tol: float = RESIDUAL_TOL,
+    smooth_deg: float = SMOOTH_DEG,
+    min_smooth_edges: int = MIN_SMOOTH_EDGES,
+) -> bool:
+    """The surface is plane: touched somewhere, and not curved (see ``surface_curved``)."""
+    return contact(model) and not surface_curved(
+        model, residual_tol=residual_tol, smooth_deg=smooth_deg, min_smooth_edges=min_smooth_edges
+    )
+
+
+def lateral_edges_parallel(
+    model: ObjectModel,
+    *,
+    tolerance_deg: float = TOLERANCE_DEG,
+    horizontal_deg: float = HORIZONTAL_DEG,
+    min_edges: int = 3,
+) -> bool:
+    """ "Vertical" (lateral) edges are parallel: all within ``tolerance_deg`` of their mean."""
+    _, d = _lateral_lines(model, horizontal_deg)
+    if len(d) < min_edges:
+        return False
+    _, vecs = np.linalg.eigh(d.T @ d)
+    axis = vecs[:, -1]
+    worst = float(np.degrees(np.arccos(np.clip(np.abs(d @ axis).min(), -1.0, 1.0))))
+    return worst <= tolerance_deg
+
+
+def lateral_edges_concurrent(
+    model: ObjectModel,
+    *,
+    point_tol: float = POINT_TOL,
+    tolerance_deg: float = TOLERANCE_DEG,
+    horizontal_deg: float = HORIZONTAL_DEG,
+    min_edges: int = 3,
+) -> bool:
+    """ "Vertical" edges join at one point: their least-squares common point misses each line
+    by at most ``point_tol`` × the object's diameter (RMS), and they are not parallel."""
+    _, d = _lateral_lines(model, horizontal_deg)
+    if len(d) < min_edges or lateral_edges_parallel(
+        model, tolerance_deg=tolerance_deg, horizontal_deg=horizontal_deg, min_edges=min_edges
+    ):
+        return False
+    found = lateral_common_point(model, horizontal_deg=horizontal_deg)
+    if found is None:
+        return False
+    return found[1] <= point_tol * _poly(model, "lateral_edges_concurrent").diameter
+
+
+def face_count(
+    model: ObjectModel, *, equals: int | None = None, min: int | None = None, max: int | None = None
+) -> bool:
+    """The polyhedron has ``equals`` faces (or between ``min`` and ``max``), the base included."""
+    n = len(_poly(model, "face_count").faces)
+    if equals is not None and n != equals:
+        return False
+    if min is not None and n < min:
+        return False
+    return not (max is not None and n > max)
+
+
+def parallel_face_pairs(
+    model: ObjectModel,
+    *,
+    count: int | None = 3,
+    min: int | None = None,
+    tolerance_deg: float = TOLERANCE_DEG,
+    sigmas: float = SIGMAS,
+) -> bool:
+    """Exactly ``count`` (or at least ``min``) pairs of parallel faces exist."""
+    table = parallelism_table(model, tolerance_deg=tolerance_deg, sigmas=sigmas)
+    pairs = int(np.triu(table, 1).sum())
+    if min is not None:
+        return pairs >= min
+    return count is not None and pairs == count
+
+
+def adjacent_faces_perpendicular(
+    model: ObjectModel, *, tolerance_deg: float = TOLERANCE_DEG, sigmas: float = SIGMAS
+) -> bool:
+    """Every two faces that share an edge are perpendicular."""
+    p = _poly(model, "adjacent_faces_perpendicular")
+    table = perpendicularity_table(model, tolerance_deg=tolerance_deg, sigmas=sigmas)
+    return all(bool(table[f, g]) for f, g in p.edge_faces)
+
+
+def equal_edges(model: ObjectModel, *, rel_tol: float = REL_TOL) -> bool:
+    """Distances between neighbouring vertices are equal: (max − min) / mean ≤ ``rel_tol``."""
+    lengths = _poly(model, "equal_edges").edge_lengths()
+    return bool((lengths.max() - lengths.min()) / lengths.mean() <= rel_tol)
+
+
+def _face_signature(p: Polyhedron, f: int) -> tuple[FloatArray, FloatArray]:
+    v = p.vertices[list(p.faces[f])]
+    nxt = np.roll(v, -1, axis=0)
+    prv = np.roll(v, 1, axis=0)
+    lengths = np.linalg.norm(nxt - v, axis=1)
+    a, b = nxt - v, prv - v
+    cos = np.einsum("ij,ij->i", a, b) / (np.linalg.norm(a, axis=1) * np.linalg.norm(b, axis=1))
+    return np.sort(lengths), np.sort(np.degrees(np.arccos(np.clip(cos, -1.0, 1.0))))
+
+
+def congruent_faces(
+    model: ObjectModel, *, rel_tol: float = REL_TOL, tolerance_deg: float = TOLERANCE_DEG
+) -> bool:
+    """All faces are congruent: same number of sides, side lengths and angles."""
+    p = _poly(model, "congruent_faces")
+    sigs = [_face_signature(p, f) for f in range(len(p.faces))]
+    l0, a0 = sigs[0]
+    scale = float(np.mean([s[0].mean() for s in sigs]))
+    for lengths, angles in sigs[1:]:
+        if len(lengths) != len(l0):
+            return False
+        if (
+            np.abs(lengths - l0).max() > rel_tol * scale
+            or np.abs(angles - a0).max() > tolerance_deg
+        ):
+            return False
+    return True
+
+
+def top_face(model: ObjectModel, *, horizontal_deg: float = HORIZONTAL_DEG) -> bool:
+    """A top face parallel to the base (the table) exists."""
+    _, top = _base_top(_poly(model, "top_face"), horizontal_deg)
+    return bool(top)
+
+
+def lateral_faces_triangles(model: ObjectModel, *, horizontal_deg: float = HORIZONTAL_DEG) -> bool:
+    """Every lateral face (neither base nor top) is a triangle."""
+    p = _poly(model, "lateral_faces_triangles")
+    base, top = _base_top(p, horizontal_deg)
+    sides = [f for f in range(len(p.faces)) if f not in base | top]
+    return bool(sides) and all(len(p.faces[f]) == 3 for f in sides)
+
+
+def lateral_faces_vertical(
+    model: ObjectModel,
+    *,
+    tolerance_deg: float = TOLERANCE_DEG,
+    horizontal_deg: float = HORIZONTAL_DEG,
+) -> bool:
+    """Every lateral face is vertical (its normal horizontal within ``tolerance_deg``)."""
+    p = _poly(model, "lateral_faces_vertical")
+    base, top = _base_top(p, horizontal_deg)
+    sides = [f for f in range(len(p.faces)) if f not in base | top]
+    s = math.sin(math.radians(tolerance_deg))
+    return bool(sides) and all(abs(p.normals[f, 2]) <= s for f in sides)
+
+
+def triangle_faces(model: ObjectModel) -> bool:
+    """Every face of the polyhedron is a triangle."""
+    return all(len(f) == 3 for f in _poly(model, "triangle_faces").faces)
+
+
+def convex(model: ObjectModel) -> bool:
+    """No concave face was touched (an object of several boxes is not convex)."""
+    return model.convex
+
+
+def _feature(fn: FeatureFn, requires: Literal["contact", "model"] = "model") -> Feature:
+    sig = inspect.signature(fn)
+    params = {
+        n: (None if p.default is inspect.Parameter.empty else p.default)
+        for n, p in sig.parameters.items()
+        if p.kind is inspect.Parameter.KEYWORD_ONLY
+    }
+    doc = (fn.__doc__ or "").strip().split("\n\n")[0].replace("\n", " ")
+    return Feature(fn.__name__, fn, requires, doc, params)
+
+
+BUILTIN_FEATURES: Mapping[str, Feature] = {
+    f.name: f
+    for f in (
+        _feature(contact, "contact"),
+        _feature(surface_curved),
+        _feature(surface_plane),
+        _feature(lateral_edges_parallel),
+        _feature(lateral_edges_concurrent),
+        _feature(face_count),
+        _feature(parallel_face_pairs),
+        _feature(adjacent_faces_perpendicular),
+        _feature(equal_edges),
+        _feature(congruent_faces),
+        _feature(top_face),
+        _feature(lateral_faces_triangles),
+        _feature(lateral_faces_vertical),
+        _feature(triangle_faces),
+        _feature(convex),
+    )
+}
+"""The built-in features by name; the entry point ``builtin`` of ``tactile_kb.features``."""
+
+
+def _valid(obj: Any) -> bool:
+    return isinstance(obj, Feature) or callable(obj)
+
+
+_REGISTRY: Registry[Feature] = Registry("tactile_kb.features", "feature", check=_valid)
+_BUILTINS_CHECKED = False
+
+
+def feature_registry() -> Registry[Feature]:
+    """The registry of feature extractors (built-ins load through their entry point)."""
+    global _BUILTINS_CHECKED
+    if not _BUILTINS_CHECKED:
+        _BUILTINS_CHECKED = True
+        declared = any(
+            ep.value == "tactile_kb.features:BUILTIN_FEATURES"
+            for ep in entry_points(group="tactile_kb.features")
+        )
+        if not declared:  # a source checkout that is not installed: register them from code
+            for name, feat in BUILTIN_FEATURES.items():
+                _REGISTRY.register(name, feat, source="builtin")
+    return _REGISTRY
+
+
+def get_feature(name: str | Feature) -> Feature:
+    """The feature called ``name`` (a :class:`Feature` is returned as it is)."""
+    if isinstance(name, Feature):
+        return name
+    obj: Any = feature_registry().get(name)
+    if isinstance(obj, Feature):
+        return obj
+    return _feature(obj) if obj.__name__ == name else Feature(name, obj, "model", obj.__doc__ or "")
+
+
+def available_features() -> list[str]:
+    """Names of the features that load, sorted."""
+    return feature_registry().available()
+
+
+def check_binding(name: str, params: Mapping[str, Any]) -> str | None:
+    """Why a rule file's binding of feature ``name`` with ``params`` is wrong, or None."""
+    try:
+        feat = get_feature(name)
+    except PluginError as exc:
+        return str(exc)
+    sig = inspect.signature(feat.fn)
+    accepted = [n for n, p in sig.parameters.items() if p.kind is inspect.Parameter.KEYWORD_ONLY]
+    for key, value in params.items():
+        if key not in accepted:
+            listed = ", ".join(sorted(accepted)) or "none"
+            return f"feature {name!r} has no parameter {key!r} (parameters: {listed})"
+        default = feat.params.get(key)
+        if isinstance(value, bool) or not isinstance(value, int | float):
+            return f"feature {name!r}: parameter {key!r} must be a number, got {value!r}"
+        if (
+            isinstance(default, int)
+            and not isinstance(default, bool)
+            and not isinstance(value, int)
+        ):
+            return f"feature {name!r}: parameter {key!r} must be an integer, got {value!r}"
+        if value < 0:
+            return f"feature {name!r}: parameter {key!r} must be ≥ 0, got {value!r}"
+    if name == "face_count" and not any(k in params for k in ("equals", "min", "max")):
+        return "feature 'face_count' needs one of the parameters equals, min, max"
+    return None
+
+
+def evaluate_feature(
+    feature: str | Feature, model: ObjectModel, params: Mapping[str, Any] | None = None
+) -> bool:
+    """Evaluate a feature on ``model`` with ``params``, checking the binding first."""
+    feat = get_feature(feature)
+    problem = check_binding(feat.name, params or {}) if not isinstance(feature, Feature) else None
+    if problem:
+        raise UsageError(problem)
+    return bool(feat.fn(model, **(params or {})))

@@ -1,0 +1,195 @@
+"""The mathematical model of a touched object: its faces, enveloping polyhedron and sections.
+
+"If the object is scanned by being touched at more points, we can have the assembly of all
+surface equations of the enveloping polyhedron, which gives us the mathematical model of the
+object." :func:`build_model` takes an exploration record through the whole chain — contacts →
+one plane per face (:mod:`tactile_kb.planes`) → the enveloping polyhedron
+(:mod:`tactile_kb.polyhedron`) → layer contours for non-convex objects
+(:mod:`tactile_kb.sections`) — and returns an :class:`ObjectModel`, the value the feature
+extractors read.
+
+A face whose plane has touched points of the object outside it is *concave* (the inner sides
+of an L-shaped block): the polyhedron is built from the supporting faces only, so for a
+non-convex object it is its convex envelope, and the layer contours are the other view.
+A partial record (an unexplored side) gives ``polyhedron=None`` and ``open_reason``.
+
+Examples
+--------
+>>> from tactile_kb.finger import builtin_finger
+>>> from tactile_kb.solids import box
+>>> from tactile_kb.synthetic import sample_record
+>>> model = build_model(sample_record(box(0.08, 0.08, 0.08), builtin_finger("33"), seed=3))
+>>> model.polyhedron is not None, len(model.faces), model.convex
+(True, 6, True)
+>>> partial = sample_record(box(0.08, 0.08, 0.08), builtin_finger("4"), noise=0.0, seed=3)
+>>> m2 = build_model(partial)
+>>> m2.polyhedron is None, m2.open_directions
+(True, [(0.0, 0.0, 1.0)])
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from tactile_kb.errors import GeometryError, OpenModelError, UsageError
+from tactile_kb.planes import DEFAULT_SPLIT_TOL, Face, merge_planes
+from tactile_kb.polyhedron import DEFAULT_MERGE_FRACTION, Polyhedron, polyhedron_from_planes
+from tactile_kb.record import ExplorationRecord
+from tactile_kb.sections import LayerSection, distinct_planes, layer_sections
+
+__all__ = ["ObjectModel", "build_model"]
+
+
+@dataclass(frozen=True, eq=False)
+class ObjectModel:
+    """What the touch told: the record, its faces, the enveloping polyhedron, the layers.
+
+    Attributes
+    ----------
+    record
+        The exploration record the model was built from.
+    faces
+        One :class:`~tactile_kb.planes.Face` per face touched, then the table.
+    polyhedron
+        The enveloping polyhedron of the supporting faces, or None when they do not bound a
+        region (then ``open_reason`` says why and ``open_directions`` where to explore).
+    supporting
+        Per face: True when no touched point lies outside its plane (False: a concave face).
+    layers
+        Layer contours of non-convex explorations (contacts with a ``layer``), bottom up.
+    options
+        The options the model was built with.
+    """
+
+    record: ExplorationRecord
+    faces: tuple[Face, ...]
+    polyhedron: Polyhedron | None
+    supporting: tuple[bool, ...]
+    open_reason: str = ""
+    open_directions: list[tuple[float, float, float]] = field(default_factory=list)
+    layers: tuple[LayerSection, ...] = ()
+    options: dict[str, Any] = field(default_factory=dict)
+    face_of: tuple[int, ...] = ()
+    """For each polyhedron face, the index of its :class:`Face` in ``faces``."""
+
+    @property
+    def convex(self) -> bool:
+        """True when every face supports the object (no concave face was touched)."""
+        return all(self.supporting)
+
+    @property
+    def contact_faces(self) -> tuple[Face, ...]:
+        """The faces found from contacts (without the table)."""
+        return tuple(f for f in self.faces if f.source == "contacts")
+
+    @property
+    def sections(self) -> tuple[LayerSection, ...]:
+        """Alias of ``layers``: the stacked contour polygons."""
+        return self.layers
+
+    def distinct_planes(self) -> list[tuple[tuple[float, float], float]]:
+        """The different vertical planes touched over all layers (P1…P7 of the paper's Fig. 1)."""
+        return distinct_planes(self.layers)
+
+
+def build_model(
+    record: ExplorationRecord,
+    *,
+    cut_deg: float | None = None,
+    split_tol: float | None = None,
+    merge_fraction: float = DEFAULT_MERGE_FRACTION,
+    include_table: bool = True,
+    support_tol: float | None = None,
+    open_factor: float = 3.0,
+) -> ObjectModel:
+    """Build the :class:`ObjectModel` of ``record``.
+
+    Parameters
+    ----------
+    record
+        Contacts from an explorer or :func:`tactile_kb.synthetic.sample_record`.
+    cut_deg, split_tol
+        Passed to :func:`tactile_kb.planes.merge_planes`.
+    merge_fraction
+        Passed to :func:`tactile_kb.polyhedron.polyhedron_from_planes`.
+    include_table
+        Add the support plane z = 0 as a face.
+    support_tol
+        A face is concave when a touched point lies more than this (m) outside its plane;
+        default: the split tolerance.
+    open_factor
+        The planes must close within this many times the radius of the touched points
+        (about their centre); further out the model counts as open (nearly parallel sides
+        that meet only far away mean an unexplored end).
+
+    Returns
+    -------
+    ObjectModel
+        Never raises for a record that is merely incomplete or contradictory: then
+        ``polyhedron`` is None and ``open_reason`` says why.
+    """
+    if not isinstance(record, ExplorationRecord):
+        raise UsageError(f"build_model needs an ExplorationRecord, got {type(record).__name__}")
+    faces = merge_planes(record, cut_deg=cut_deg, split_tol=split_tol, include_table=include_table)
+    noise = float(record.params.get("noise", 0.0))
+    tol = (
+        support_tol if support_tol is not None else max(split_tol or DEFAULT_SPLIT_TOL, 6.0 * noise)
+    )
+    points = _surface_points(record, faces)
+    supporting = []
+    for f in faces:
+        if len(points) == 0:
+            supporting.append(True)
+            continue
+        outside = points @ f.normal_array - f.offset
+        supporting.append(bool(outside.max() <= tol))
+    options = {
+        "cut_deg": cut_deg,
+        "split_tol": split_tol,
+        "merge_fraction": merge_fraction,
+        "include_table": include_table,
+        "support_tol": tol,
+        "open_factor": open_factor,
+    }
+    layers = layer_sections(record)
+    keep = [f for f, s in zip(faces, supporting, strict=True) if s]
+    try:
+        poly = polyhedron_from_planes(
+            np.asarray([f.normal for f in keep], dtype=float).reshape(-1, 3),
+            np.asarray([f.offset for f in keep], dtype=float),
+            merge_fraction=merge_fraction,
+            bound=_bound(points, open_factor),
+            interior=points.mean(axis=0) if len(points) >= 4 else None,
+        )
+    except OpenModelError as exc:
+        return ObjectModel(
+            record, faces, None, tuple(supporting), str(exc), exc.open_directions, layers, options
+        )
+    except GeometryError as exc:
+        return ObjectModel(record, faces, None, tuple(supporting), str(exc), [], layers, options)
+    kept = [i for i, s in enumerate(supporting) if s]
+    face_of = tuple(kept[p] for p in poly.plane_index)
+    return ObjectModel(record, faces, poly, tuple(supporting), "", [], layers, options, face_of)
+
+
+def _bound(
+    points: np.ndarray[Any, np.dtype[np.float64]], factor: float
+) -> tuple[Any, float] | None:
+    if len(points) < 4:
+        return None
+    centre = points.mean(axis=0)
+    radius = float(np.linalg.norm(points - centre, axis=1).max())
+    return (centre, factor * max(radius, 1e-6))
+
+
+def _surface_points(
+    record: ExplorationRecord, faces: tuple[Face, ...]
+) -> np.ndarray[Any, np.dtype[np.float64]]:
+    """Each contact's point on the object: its tip centre moved ρ along −(its face's normal)."""
+    rho = record.tip_radius
+    centres = np.asarray([c.centre for c in record.contacts], dtype=float).reshape(-1, 3)
+    parts = [centres[list(f.contacts)] - rho * f.normal_array for f in faces if f.contacts]
+    return np.vstack(parts) if parts else np.zeros((0, 3))

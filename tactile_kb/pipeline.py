@@ -1,0 +1,239 @@
+"""End to end: explore an object, model it, decide its propositions phase by phase, name it.
+
+The data flows one way, each stage a plain value::
+
+    mesh ─explorer─▶ ExplorationRecord ─build_model─▶ ObjectModel ─features─▶ truth values
+    rule file ─load_rules─▶ RuleSet ─compile_rules─▶ KnowledgeBase ─decide─▶ Decision
+
+Exploration is lazy where the rule file's phases allow: a proposition whose feature needs only
+contact (phase I of the paper: "there is contact between the object and the finger") is
+decided after the first touch; the rest of the object is explored only when a later phase
+asks for a proposition that needs the whole model.
+
+Examples
+--------
+>>> from tactile_kb.solids import box
+>>> result = classify(box(0.08, 0.08, 0.08))
+>>> result.decision.answer
+'OBJECT IS A CUBE'
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass, field
+from functools import lru_cache
+from pathlib import Path
+from typing import Any
+
+from tactile_kb.compiler import KnowledgeBase, compile_rules
+from tactile_kb.engine import Decision
+from tactile_kb.errors import Problem, RuleFileError, UsageError
+from tactile_kb.explorers import Explorer, Goal, get_explorer
+from tactile_kb.features import check_binding, get_feature
+from tactile_kb.finger import Finger
+from tactile_kb.model import ObjectModel, build_model
+from tactile_kb.objects import ObjectLike, object_name
+from tactile_kb.record import ExplorationRecord
+from tactile_kb.rules import RuleSet, load_rules
+
+__all__ = ["Classification", "classify", "classify_record", "knowledge_base"]
+
+RulesLike = str | Path | RuleSet | KnowledgeBase
+
+
+@dataclass(frozen=True)
+class Classification:
+    """The outcome of classifying one object: the decision and everything behind it."""
+
+    object: str
+    decision: Decision
+    record: ExplorationRecord
+    model: ObjectModel
+    seconds: float
+    contacts_per_phase: dict[str, int] = field(default_factory=dict)
+    """Touches made by the time each rule-file phase was decided (cumulative)."""
+
+    @property
+    def planes(self) -> int:
+        """Distinct planes in the model (the table included)."""
+        return len(self.model.faces)
+
+    def summary(self) -> dict[str, Any]:
+        """The JSON line of ``tactile-kb classify --json``."""
+        return {
+            "object": self.object,
+            "answer": self.decision.answer,
+            "label": self.decision.label,
+            "bits": self.decision.bits,
+            "propositions": dict(self.decision.values),
+            "contacts": self.record.touches,
+            "planes": self.planes,
+            "path_length": round(self.record.path_length, 6),
+            "seconds": round(self.seconds, 4),
+            "phase": self.decision.phase,
+            "contacts_per_phase": dict(self.contacts_per_phase),
+            "explanation": self.decision.explanation,
+        }
+
+
+@lru_cache(maxsize=32)
+def _compiled(path: str, mtime_ns: int) -> KnowledgeBase:
+    return compile_rules(Path(path))
+
+
+def knowledge_base(rules: RulesLike) -> KnowledgeBase:
+    """Compile ``rules`` (a packaged name, a file, a RuleSet) once; a KnowledgeBase passes through.
+
+    Every proposition must be bound to a registered feature with valid parameters; a bad
+    binding raises :class:`~tactile_kb.errors.RuleFileError` at the binding's line.
+    """
+    if isinstance(rules, KnowledgeBase):
+        kb = rules
+    elif isinstance(rules, RuleSet):
+        kb = compile_rules(rules)
+    else:
+        ruleset = load_rules(rules)
+        p = Path(ruleset.file)
+        kb = _compiled(str(p), p.stat().st_mtime_ns) if p.is_file() else compile_rules(ruleset)
+    _check_bindings(kb.rules)
+    return kb
+
+
+def _check_bindings(rules: RuleSet) -> None:
+    problems = []
+    for prop in rules.propositions:
+        if prop.feature is None:
+            problems.append(
+                Problem(
+                    rules.file,
+                    prop.line,
+                    1,
+                    f"propositions.{prop.id}",
+                    "no feature decides this proposition (add feature: NAME)",
+                )
+            )
+            continue
+        message = check_binding(prop.feature.name, prop.feature.params)
+        if message:
+            problems.append(
+                Problem(
+                    rules.file,
+                    prop.feature.line,
+                    prop.feature.column,
+                    f"propositions.{prop.id}.feature",
+                    message,
+                )
+            )
+    if problems:
+        raise RuleFileError(problems)
+
+
+class _Evidence:
+    """Explores lazily and evaluates features on the model built from what was explored."""
+
+    def __init__(
+        self, advance: Callable[[Goal], ExplorationRecord], record: ExplorationRecord | None
+    ):
+        self._advance = advance
+        self._record = record
+        self._model: ObjectModel | None = None
+        self._model_of: int = -1
+
+    @property
+    def record(self) -> ExplorationRecord:
+        if self._record is None:
+            self._record = self._advance("contact")
+        return self._record
+
+    def model(self, goal: Goal) -> ObjectModel:
+        if goal == "complete" and not self.record.complete:
+            self._record = self._advance("complete")
+        rec = self.record
+        key = id(rec)
+        if self._model is None or self._model_of != key:
+            self._model = build_model(rec)
+            self._model_of = key
+        return self._model
+
+
+def _decide(kb: KnowledgeBase, evidence: _Evidence) -> tuple[Decision, dict[str, int]]:
+    per_phase: dict[str, int] = {}
+    providers: dict[str, Callable[[], bool]] = {}
+    for prop in kb.rules.propositions:
+        assert prop.feature is not None  # checked by knowledge_base()
+        feature = get_feature(prop.feature.name)
+        goal: Goal = "contact" if feature.requires == "contact" else "complete"
+        params: Mapping[str, Any] = prop.feature.params
+
+        def provide(
+            feature: Any = feature,
+            goal: Goal = goal,
+            params: Mapping[str, Any] = params,
+            phase: str = prop.phase,
+        ) -> bool:
+            value = bool(feature.fn(evidence.model(goal), **params))
+            per_phase[phase] = evidence.record.touches
+            return value
+
+        providers[prop.id] = provide
+    return kb.decide(providers), per_phase
+
+
+def classify(
+    obj: ObjectLike,
+    *,
+    rules: RulesLike = "parallelepipeds",
+    explorer: str | Explorer = "stepper",
+    finger: Finger | str = "33",
+    noise: float = 0.0,
+    seed: int | None = 0,
+) -> Classification:
+    """Explore ``obj`` (a trimesh mesh or a mesh file) by touch and classify it with ``rules``.
+
+    Parameters
+    ----------
+    obj
+        The object: a ``trimesh.Trimesh`` or an STL/OBJ/PLY path, in metres.
+    rules
+        A packaged rule set name (``"parallelepipeds"``, ``"polyhedra"``), a YAML file, a
+        loaded :class:`~tactile_kb.rules.RuleSet` or a compiled KnowledgeBase.
+    explorer
+        An explorer name (``"stepper"``, ``"mujoco"`` when installed) or instance.
+    finger
+        ``"33"``, ``"4"``, a layout YAML file or a :class:`~tactile_kb.finger.Finger`.
+    noise
+        σ of the contact-position noise, metres.
+    seed
+        Makes the exploration (noise, drop-outs) reproducible.
+    """
+    if noise < 0:
+        raise UsageError(f"--noise must be ≥ 0 metres, got {noise}")
+    t0 = time.perf_counter()
+    kb = knowledge_base(rules)
+    session = get_explorer(explorer).session(obj, finger=finger, seed=seed, noise=noise)
+    evidence = _Evidence(session.advance, None)
+    decision, per_phase = _decide(kb, evidence)
+    record = evidence.record  # as far as the decision needed to explore
+    model = evidence.model("contact")  # the model of that record (no further exploration)
+    seconds = time.perf_counter() - t0
+    return Classification(object_name(obj), decision, record, model, seconds, per_phase)
+
+
+def classify_record(
+    record: ExplorationRecord, *, rules: RulesLike = "parallelepipeds"
+) -> Classification:
+    """Classify a saved exploration record without exploring again."""
+    t0 = time.perf_counter()
+    kb = knowledge_base(rules)
+
+    def no_more(goal: Goal) -> ExplorationRecord:
+        return record
+
+    evidence = _Evidence(no_more, record)
+    decision, per_phase = _decide(kb, evidence)
+    model = evidence.model("contact")
+    return Classification(
+        record.object, decision, record, model, time.perf_counter() - t0, per_phase
+    )

@@ -1,0 +1,449 @@
+"""The built-in analytic explorer: a spherical tip moving straight among the triangles of a mesh.
+
+:class:`StepperWorld` implements :class:`tactile_kb.world.World` exactly, without time steps.
+The set of tip-centre positions at which the tip of radius ρ touches (or penetrates) a
+triangle mesh is the union of simple convex primitives: for each triangle the slab
+``|(p − v0)·n| ≤ ρ`` over the triangle, for each edge a cylinder of radius ρ between its ends,
+for each vertex a ball of radius ρ. A straight motion ``p(t) = a + t·u`` meets each primitive
+in one interval of ``t``, found in closed form (a linear condition per triangle side, a
+quadratic for a cylinder or a ball). Where those intervals start and end are the only places
+where the fired set can change, so the world evaluates the sensors between consecutive ends
+and reports the first change:
+
+* contact intervals use the radius ρ + :data:`~tactile_kb.world.CONTACT_TOL` (a sensor fires
+  at a contact within that tolerance);
+* blocking intervals use ρ − 1e-9 m: the tip stops where it would penetrate.
+
+A slide follows the horizontal tangent of the surface under the followed sensor; for a plane
+surface the tip stays at constant distance from it, so the same interval algebra gives where
+the face ends (a ``"release"`` at a convex edge) or where another face closes a sensor (a
+``"touch"`` at a concave corner).
+
+Options: ``noise`` (σ, metres, Gaussian noise on the measured tip position of every motion),
+``dropout`` (probability that a closing sensor's signal is lost: the finger stops blind,
+``"blocked"``), ``false_fire`` (probability per motion that a random sensor fires spuriously
+somewhere along it) and ``seed``; the same seed and the same calls give the same answers.
+
+Examples
+--------
+>>> import trimesh
+>>> from tactile_kb.finger import builtin_finger
+>>> cube = trimesh.creation.box((0.1, 0.1, 0.1))
+>>> _ = cube.apply_translation((0.0, 0.0, 0.05))
+>>> world = StepperWorld(cube, builtin_finger("4"))
+>>> m = world.move((-0.2, 0.0, 0.03), (1.0, 0.0, 0.0), 0.3)
+>>> m.event, m.closed, round(m.end[0], 6)
+('touch', (0,), -0.055)
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from typing import Any
+
+import numpy as np
+import trimesh
+from numpy.typing import NDArray
+
+from tactile_kb.errors import UsageError
+from tactile_kb.explorers import WorldExplorer
+from tactile_kb.finger import Finger
+from tactile_kb.world import CONTACT_TOL, Box, Event, Motion, MotionKind, Vec3, Workspace
+
+__all__ = ["BLOCK_TOL", "StepperExplorer", "StepperWorld", "default_workspace"]
+
+BLOCK_TOL = 1e-9
+"""Metres: the tip is blocked where its distance to the mesh would drop below ρ − BLOCK_TOL."""
+
+_NUDGE = 1e-8  # how far past a change the motion stops, so the new state holds at the end
+_EPS_T = 1e-12
+
+FArray = NDArray[np.float64]
+
+
+def _closest(triangles: FArray, points: FArray) -> FArray:
+    """The closest point of each triangle to the matching point (trimesh, vectorised)."""
+    out: FArray = trimesh.triangles.closest_point(triangles, points)  # type: ignore[no-untyped-call]
+    return out
+
+
+def default_workspace(bounds: FArray, radius: float) -> Workspace:
+    """A workspace around an object's ``bounds`` (2, 3): its size plus 0.15 m each side, floor ρ."""
+    lo, hi = np.asarray(bounds[0], float), np.asarray(bounds[1], float)
+    pad = 0.15
+    return Workspace(
+        lo=(float(lo[0] - pad), float(lo[1] - pad), float(radius)),
+        hi=(float(hi[0] + pad), float(hi[1] + pad), float(hi[2] + pad)),
+    )
+
+
+def _v3(a: Sequence[float] | FArray) -> Vec3:
+    return (float(a[0]), float(a[1]), float(a[2]))
+
+
+class StepperWorld:
+    """A :class:`~tactile_kb.world.World` in which the object is a triangle mesh and the tip a sphere.
+
+    Parameters
+    ----------
+    mesh
+        The object, metres, resting on z = 0 (not modified; the world keeps its own arrays).
+    finger
+        The finger layout; its ``radius`` is ρ.
+    workspace
+        Where the tip centre may go; default :func:`default_workspace` of the mesh bounds.
+    noise
+        σ of the Gaussian noise added to the measured position of every motion (metres).
+    dropout
+        Probability that the sensors closing at a touch are not reported (the finger stops
+        blind: ``"blocked"``).
+    false_fire
+        Probability per motion that a random OFF sensor fires spuriously along it.
+    seed
+        Seed of the world's random generator (noise, drop-outs, false fires).
+    hint_margin
+        How much the :attr:`hint` box exceeds the object's bounds (metres).
+    """
+
+    def __init__(
+        self,
+        mesh: trimesh.Trimesh,
+        finger: Finger,
+        *,
+        workspace: Workspace | None = None,
+        noise: float = 0.0,
+        dropout: float = 0.0,
+        false_fire: float = 0.0,
+        seed: int | None = None,
+        hint_margin: float = 0.005,
+    ) -> None:
+        if noise < 0 or not 0 <= dropout <= 1 or not 0 <= false_fire <= 1:
+            raise UsageError("noise must be ≥ 0 and dropout, false_fire probabilities in [0, 1]")
+        self._finger = finger
+        self._rho = float(finger.radius)
+        self._dirs = finger.matrix
+        self._cos = finger.cos_cone
+        v = np.array(mesh.vertices, dtype=float)
+        f = np.array(mesh.faces, dtype=np.int64)
+        self._tri = v[f]  # (F, 3, 3)
+        normals = np.cross(self._tri[:, 1] - self._tri[:, 0], self._tri[:, 2] - self._tri[:, 0])
+        lengths = np.linalg.norm(normals, axis=1)
+        keep = lengths > 1e-18
+        self._tri, normals, lengths = self._tri[keep], normals[keep], lengths[keep]
+        self._n = normals / lengths[:, None]
+        # inward side normals of each triangle: n × (vj − vi)
+        self._side_m = np.stack(
+            [np.cross(self._n, self._tri[:, (k + 1) % 3] - self._tri[:, k]) for k in range(3)],
+            axis=1,
+        )  # (F, 3, 3)
+        edges = np.asarray(mesh.edges_unique, dtype=np.int64)
+        self._e0 = v[edges[:, 0]]
+        evec = v[edges[:, 1]] - self._e0
+        self._elen = np.linalg.norm(evec, axis=1)
+        ok = self._elen > 1e-15
+        self._e0, evec, self._elen = self._e0[ok], evec[ok], self._elen[ok]
+        self._edir = evec / self._elen[:, None]
+        self._verts = v[np.unique(f)]
+        bounds = np.array(mesh.bounds, dtype=float)
+        self._workspace = workspace or default_workspace(bounds, self._rho)
+        self._hint = Box(lo=_v3(bounds[0] - hint_margin), hi=_v3(bounds[1] + hint_margin))
+        self.noise = float(noise)
+        self.dropout = float(dropout)
+        self.false_fire = float(false_fire)
+        self._rng = np.random.default_rng(seed)
+
+    # protocol attributes ------------------------------------------------------------------------
+    @property
+    def finger(self) -> Finger:
+        """The finger layout."""
+        return self._finger
+
+    @property
+    def workspace(self) -> Workspace:
+        """Where the tip centre may go."""
+        return self._workspace
+
+    @property
+    def hint(self) -> Box:
+        """The object's bounds plus ``hint_margin``: the visual estimate."""
+        return self._hint
+
+    # sensing ------------------------------------------------------------------------------------
+    def _contacts(self, p: FArray) -> FArray:
+        """Unit directions from ``p`` to every triangle within ρ + CONTACT_TOL, (k, 3)."""
+        pts = np.broadcast_to(p, (len(self._tri), 3))
+        q = _closest(self._tri, pts)
+        d = q - p
+        dist = np.linalg.norm(d, axis=1)
+        near = dist <= self._rho + CONTACT_TOL
+        if not near.any():
+            return np.zeros((0, 3))
+        dd, nn = d[near], dist[near]
+        good = nn > 1e-12
+        return np.asarray(dd[good] / nn[good, None], dtype=float)
+
+    def _fired(self, p: FArray) -> tuple[int, ...]:
+        d = self._contacts(p)
+        if len(d) == 0:
+            return ()
+        cos = d @ self._dirs.T
+        return tuple(int(i) for i in np.flatnonzero((cos >= self._cos - 1e-12).any(axis=0)))
+
+    def sense(self, centre: Vec3) -> tuple[int, ...]:
+        """Sensors ON with the tip centre at ``centre``."""
+        return self._fired(np.asarray(centre, dtype=float))
+
+    def distance(self, centre: Vec3) -> float:
+        """Distance from ``centre`` to the mesh surface (for tests and diagnostics)."""
+        p = np.asarray(centre, dtype=float)
+        q = _closest(self._tri, np.broadcast_to(p, (len(self._tri), 3)))
+        return float(np.linalg.norm(q - p, axis=1).min())
+
+    # interval algebra ---------------------------------------------------------------------------
+    def _intervals(self, a: FArray, u: FArray, r: float) -> tuple[FArray, FArray]:
+        """Entry and exit parameters of the line a + t·u in every primitive of radius r."""
+        los: list[FArray] = []
+        his: list[FArray] = []
+        # vertices: |a - v + t u|^2 = r^2
+        w = a - self._verts
+        b = w @ u
+        c = np.einsum("ij,ij->i", w, w) - r * r
+        disc = b * b - c
+        ok = disc > 0
+        sq = np.sqrt(np.where(ok, disc, 0.0))
+        los.append(np.where(ok, -b - sq, np.inf))
+        his.append(np.where(ok, -b + sq, -np.inf))
+        # edges: infinite cylinder clipped by the slab 0 <= s <= len
+        w = a - self._e0
+        we = np.einsum("ij,ij->i", w, self._edir)
+        ue = self._edir @ u
+        wp = w - we[:, None] * self._edir
+        up = u - ue[:, None] * self._edir
+        aa = np.einsum("ij,ij->i", up, up)
+        bb = np.einsum("ij,ij->i", wp, up)
+        cc = np.einsum("ij,ij->i", wp, wp) - r * r
+        par = aa < 1e-14
+        disc = bb * bb - aa * cc
+        okc = (disc > 0) & ~par
+        sq = np.sqrt(np.where(okc, disc, 0.0))
+        safe_a = np.where(par, 1.0, aa)
+        lo = np.where(okc, (-bb - sq) / safe_a, np.inf)
+        hi = np.where(okc, (-bb + sq) / safe_a, -np.inf)
+        inside_par = par & (cc < 0)
+        lo = np.where(inside_par, -np.inf, lo)
+        hi = np.where(inside_par, np.inf, hi)
+        moving = np.abs(ue) > 1e-14
+        safe_ue = np.where(moving, ue, 1.0)
+        s1 = -we / safe_ue
+        s2 = (self._elen - we) / safe_ue
+        slo = np.where(
+            moving, np.minimum(s1, s2), np.where((we >= 0) & (we <= self._elen), -np.inf, np.inf)
+        )
+        shi = np.where(
+            moving, np.maximum(s1, s2), np.where((we >= 0) & (we <= self._elen), np.inf, -np.inf)
+        )
+        los.append(np.maximum(lo, slo))
+        his.append(np.minimum(hi, shi))
+        # triangles: |s(t)| <= r and the projection inside the triangle
+        w = a - self._tri[:, 0]
+        s0 = np.einsum("ij,ij->i", w, self._n)
+        sd = self._n @ u
+        movn = np.abs(sd) > 1e-14
+        safe_sd = np.where(movn, sd, 1.0)
+        t1 = (-r - s0) / safe_sd
+        t2 = (r - s0) / safe_sd
+        inside = np.abs(s0) < r
+        lo = np.where(movn, np.minimum(t1, t2), np.where(inside, -np.inf, np.inf))
+        hi = np.where(movn, np.maximum(t1, t2), np.where(inside, np.inf, -np.inf))
+        for k in range(3):
+            m = self._side_m[:, k]
+            g0 = np.einsum("ij,ij->i", a - self._tri[:, k], m)
+            gd = m @ u
+            mv = np.abs(gd) > 1e-14
+            safe_gd = np.where(mv, gd, 1.0)
+            root = -g0 / safe_gd
+            # g0 + t gd >= 0
+            lo = np.where(mv & (gd > 0), np.maximum(lo, root), lo)
+            hi = np.where(mv & (gd < 0), np.minimum(hi, root), hi)
+            bad = ~mv & (g0 < 0)
+            lo = np.where(bad, np.inf, lo)
+            hi = np.where(bad, -np.inf, hi)
+        los.append(lo)
+        his.append(hi)
+        return np.concatenate(los), np.concatenate(his)
+
+    def _block_at(self, a: FArray, u: FArray, limit: float) -> float:
+        """Where along the segment the tip would start to penetrate (``inf`` if nowhere)."""
+        lo, hi = self._intervals(a, u, self._rho - BLOCK_TOL)
+        real = (hi - lo > _EPS_T) & (hi > _EPS_T) & (lo > -1e-10) & (lo <= limit)
+        if not real.any():
+            return math.inf
+        return float(max(0.0, lo[real].min()))
+
+    # motions ------------------------------------------------------------------------------------
+    def move(self, start: Vec3, direction: Vec3, length: float) -> Motion:
+        """A rigid straight motion (see :meth:`tactile_kb.world.World.move`)."""
+        return self._run("move", start, direction, length)
+
+    def slide(self, start: Vec3, direction: Vec3, length: float, sensor: int) -> Motion:
+        """A compliant motion along the surface under ``sensor`` (see the protocol)."""
+        a = np.asarray(start, dtype=float)
+        if not 0 <= sensor < len(self._dirs):
+            raise UsageError(f"slide: no sensor {sensor} on finger {self._finger.name!r}")
+        cmd = np.asarray(direction, dtype=float)
+        contacts = self._contacts(a)
+        cos = contacts @ self._dirs[sensor] if len(contacts) else np.zeros(0)
+        if len(contacts) == 0 or cos.max() < self._cos - 1e-12:
+            fired = self._fired(a)
+            return Motion(
+                kind="slide",
+                start=_v3(a),
+                end=_v3(a),
+                direction=_v3(cmd),
+                distance=0.0,
+                event="release",
+                fired_start=fired,
+                fired=fired,
+                closed=(),
+                opened=(sensor,),
+                measured=self._measure(a),
+            )
+        n = -contacts[int(np.argmax(cos))]
+        t = np.array([-n[1], n[0], 0.0])
+        norm = float(np.linalg.norm(t))
+        if norm < 1e-9:  # a horizontal surface: any horizontal direction is tangent
+            t = np.array([cmd[0], cmd[1], 0.0])
+            norm = float(np.linalg.norm(t))
+            if norm < 1e-12:
+                raise UsageError("slide: the commanded direction has no horizontal component")
+            t /= norm
+        else:
+            t /= norm
+            if float(t @ cmd) < 0:
+                t = -t
+        return self._run("slide", _v3(a), _v3(t), length)
+
+    def _measure(self, p: FArray) -> Vec3:
+        if self.noise > 0:
+            return _v3(p + self._rng.normal(0.0, self.noise, 3))
+        return _v3(p)
+
+    def _run(self, kind: MotionKind, start: Vec3, direction: Vec3, length: float) -> Motion:
+        a = np.asarray(start, dtype=float)
+        u = np.asarray(direction, dtype=float)
+        nu = float(np.linalg.norm(u))
+        if not math.isfinite(nu) or nu < 1e-12:
+            raise UsageError(f"{kind}: direction {direction} is not a direction")
+        if not math.isfinite(length) or length < 0:
+            raise UsageError(f"{kind}: length {length} must be a finite number ≥ 0")
+        u = u / nu
+        fired0 = self._fired(a)
+        room = self._workspace.room(_v3(a), _v3(u))
+        reach = min(float(length), room)
+        t_block = self._block_at(a, u, reach)
+        end_t = min(reach, t_block)
+        if t_block <= reach:
+            end_t = max(0.0, t_block - 1e-10)
+        lo, hi = self._intervals(a, u, self._rho + CONTACT_TOL)
+        ends = np.concatenate([lo, hi])
+        cand = np.unique(ends[(ends > _EPS_T) & (ends < end_t)])
+        marks = [0.0, *cand.tolist(), end_t]
+        event: Event = "none"
+        stop = end_t
+        fired = fired0
+        for i in range(len(marks) - 1):
+            t0, t1 = marks[i], marks[i + 1]
+            if t1 - t0 <= 0:
+                continue
+            state = self._fired(a + 0.5 * (t0 + t1) * u)
+            if state != fired0:
+                stop = t0 + min(_NUDGE, 0.5 * (t1 - t0))
+                if set(state) - set(fired0):
+                    # a touch: stop half-way into the contact shell, so that the contact holds
+                    # robustly for the next motion (a grazing approach enters it very slowly)
+                    mlo, mhi = self._intervals(a, u, self._rho + 0.5 * CONTACT_TOL)
+                    ok = (mhi - mlo > _EPS_T) & (mlo >= t0 - 1e-12) & (mlo <= end_t)
+                    if ok.any():
+                        deeper = max(stop, float(mlo[ok].min()))
+                        if set(self._fired(a + deeper * u)) >= set(state):
+                            stop = deeper
+                fired = self._fired(a + stop * u)
+                if fired == fired0:  # the change is thinner than the nudge: take the middle
+                    stop = 0.5 * (t0 + t1)
+                    fired = state
+                event = "touch" if set(fired) - set(fired0) else "release"
+                break
+        else:
+            fired = self._fired(a + end_t * u)
+            if fired != fired0:
+                event = "touch" if set(fired) - set(fired0) else "release"
+            elif t_block <= reach:
+                event = "blocked"
+            elif room < length:
+                event = "limit"
+        # spurious fire somewhere before the real event
+        if self.false_fire > 0 and self._rng.random() < self.false_fire and stop > 0:
+            off = [i for i in range(len(self._dirs)) if i not in fired0]
+            if off:
+                k = int(self._rng.choice(off))
+                stop = float(self._rng.uniform(0.0, stop))
+                fired = tuple(sorted(set(self._fired(a + stop * u)) | {k}))
+                event = "touch"
+        closed = tuple(sorted(set(fired) - set(fired0)))
+        opened = tuple(sorted(set(fired0) - set(fired)))
+        if event == "touch" and self.dropout > 0:
+            lost = {s for s in closed if self._rng.random() < self.dropout}
+            if lost:
+                fired = tuple(s for s in fired if s not in lost)
+                closed = tuple(s for s in closed if s not in lost)
+                if not closed:
+                    event = "blocked"
+        end = a + stop * u
+        return Motion(
+            kind=kind,
+            start=_v3(a),
+            end=_v3(end),
+            direction=_v3(u),
+            distance=float(stop),
+            event=event,
+            fired_start=fired0,
+            fired=fired,
+            closed=closed,
+            opened=opened,
+            measured=self._measure(end),
+        )
+
+
+class StepperExplorer(WorldExplorer):
+    """The built-in explorer: the shared servo controller driving a :class:`StepperWorld`.
+
+    Parameters
+    ----------
+    params
+        Servo parameters (:class:`tactile_kb.servo.ServoParams`); defaults suit 2–30 cm objects.
+    dropout, false_fire
+        Sensor fault probabilities passed to the world (see :class:`StepperWorld`).
+    """
+
+    name = "stepper"
+
+    def __init__(
+        self, params: Any = None, *, dropout: float = 0.0, false_fire: float = 0.0
+    ) -> None:
+        super().__init__(params)
+        self.dropout = dropout
+        self.false_fire = false_fire
+
+    def make_world(
+        self, mesh: trimesh.Trimesh, finger: Finger, *, seed: int | None, noise: float
+    ) -> StepperWorld:
+        """The analytic world of ``mesh`` sensed with ``finger``."""
+        return StepperWorld(
+            mesh,
+            finger,
+            noise=noise,
+            dropout=self.dropout,
+            false_fire=self.false_fire,
+            seed=seed,
+        )

@@ -1,0 +1,140 @@
+"""``tactile-kb classify / explore / demo / plugins``: output, JSON keys, exit codes."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import pytest
+
+from tactile_kb.cli import main
+from tactile_kb.solids import box, tetrahedron
+
+
+@pytest.fixture
+def meshes(tmp_path: Path) -> dict[str, Path]:
+    out = {}
+    for name, mesh in (("cube", box(0.08, 0.08, 0.08)), ("tetra", tetrahedron(0.1))):
+        path = tmp_path / f"{name}.stl"
+        mesh.export(path)
+        out[name] = path
+    return out
+
+
+def test_classify_prints_the_papers_answer(
+    meshes: dict[str, Path], capsys: pytest.CaptureFixture[str]
+) -> None:
+    assert main(["classify", str(meshes["cube"]), str(meshes["tetra"])]) == 0
+    out = capsys.readouterr().out.splitlines()
+    assert out == [
+        f"{meshes['cube']}- OBJECT IS A CUBE",
+        f"{meshes['tetra']}- OBJECT IS NOT A HEXAHEDRON",
+    ]
+
+
+def test_classify_json_lines(meshes: dict[str, Path], capsys: pytest.CaptureFixture[str]) -> None:
+    assert (
+        main(["classify", str(meshes["cube"]), "--json", "--noise", "0.0005", "--seed", "3"]) == 0
+    )
+    (line,) = capsys.readouterr().out.splitlines()
+    row = json.loads(line)
+    assert row["object"] == str(meshes["cube"])
+    assert row["label"] == "cube"
+    assert row["answer"] == "OBJECT IS A CUBE"
+    assert len(row["bits"]) == len(row["propositions"])
+    assert all(v in (True, False, None) for v in row["propositions"].values())
+    assert row["contacts"] > 0
+    assert row["planes"] == 6
+    assert row["path_length"] > 0
+    assert row["seconds"] > 0
+
+
+def test_one_failure_does_not_stop_the_others(
+    meshes: dict[str, Path], tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    missing = tmp_path / "nope.stl"
+    assert main(["classify", str(missing), str(meshes["cube"])]) == 1
+    captured = capsys.readouterr()
+    assert captured.out.splitlines() == [f"{meshes['cube']}- OBJECT IS A CUBE"]
+    err = captured.err.splitlines()
+    assert len(err) == 1
+    assert str(missing) in err[0]
+
+
+def test_explore_then_classify_the_record(
+    meshes: dict[str, Path], tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    rec = tmp_path / "cube.json"
+    assert main(["explore", str(meshes["cube"]), "--out", str(rec)]) == 0
+    assert rec.exists()
+    capsys.readouterr()
+    assert main(["classify", "--record", str(rec), "--json"]) == 0
+    assert json.loads(capsys.readouterr().out)["label"] == "cube"
+
+
+@pytest.mark.parametrize(
+    ("argv", "needle"),
+    [
+        (["classify"], "at least one PATH"),
+        (["classify", "x.stl", "--noise", "-1"], "--noise"),
+        (["classify", "x.stl", "--seed", "abc"], "--seed"),
+        (["classify", "x.stl", "--finger", "7"], "unknown finger"),
+        (["classify", "x.stl", "--explorer", "nonesuch"], "unknown explorer 'nonesuch'"),
+        (["classify", "x.stl", "--rules", "nonesuch"], "nonesuch"),
+        (["explore", "x.stl", "--out", "/no/such/dir/r.json"], "does not exist"),
+    ],
+)
+def test_usage_errors_are_one_line(
+    argv: list[str], needle: str, capsys: pytest.CaptureFixture[str]
+) -> None:
+    code = main(argv)
+    err = capsys.readouterr().err
+    assert code in (1, 2)
+    assert len(err.strip().splitlines()) == 1
+    assert needle in err
+    assert "Traceback" not in err
+
+
+def test_missing_plugin_prints_its_install_hint(
+    meshes: dict[str, Path], monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    from tactile_kb.explorers import explorer_registry
+
+    monkeypatch.setattr(
+        explorer_registry,
+        "_loaded",
+        {k: v for k, v in explorer_registry._loaded.items() if k != "mujoco"},
+    )
+    monkeypatch.setattr(
+        explorer_registry,
+        "_lazy",
+        {**explorer_registry._lazy, "mujoco": "tk_absent_plugin:Explorer"},
+    )
+    assert main(["classify", str(meshes["cube"]), "--explorer", "mujoco"]) == 1
+    err = capsys.readouterr().err
+    assert "pip install -e ./explorers/mujoco" in err
+
+
+def test_demo_prints_fig5(capsys: pytest.CaptureFixture[str]) -> None:
+    assert main(["demo"]) == 0
+    assert capsys.readouterr().out.splitlines() == [
+        "OCTA- OBJECT IS NOT A HEXAHEDRON",
+        "CUBE1- OBJECT IS A CUBE",
+        "CUBE2- OBJECT IS A CUBE",
+        "TETRA- OBJECT IS NOT A HEXAHEDRON",
+        "PRAPAR- OBJECT IS A RECTANGULAR PARALLELEPIPED",
+        "KOPAR- OBJECT IS A NONRECTANGULAR PARALLELEPIPED",
+        "TETRA1- OBJECT IS NOT A HEXAHEDRON",
+        "TETRA2- OBJECT IS NOT A HEXAHEDRON",
+        "CUBE11- OBJECT IS A CUBE",
+        "CUBE22- OBJECT IS A CUBE",
+        "PRAPA1- OBJECT IS A RECTANGULAR PARALLELEPIPED",
+        "KOPAR1- OBJECT IS A NONRECTANGULAR PARALLELEPIPED",
+    ]
+
+
+def test_plugins_lists_the_stepper(capsys: pytest.CaptureFixture[str]) -> None:
+    assert main(["plugins"]) == 0
+    out = capsys.readouterr().out
+    assert "stepper" in out
+    assert "parallel_face_pairs" in out

@@ -1,0 +1,339 @@
+"""Features against ground truth: solid families in random sizes and turns, exact and noisy.
+
+The truth comes from the meshes themselves (trimesh face normals and adjacency) and from what
+each family is by construction, never from the modelling code.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from typing import Any
+
+import numpy as np
+import pytest
+import trimesh
+
+from tactile_kb import solids
+from tactile_kb.errors import GeometryError, PluginError, UsageError
+from tactile_kb.features import (
+    BUILTIN_FEATURES,
+    Feature,
+    available_features,
+    check_binding,
+    evaluate_feature,
+    face_angles,
+    feature_registry,
+    get_feature,
+    lateral_common_point,
+    parallelism_table,
+    perpendicularity_table,
+    section_at,
+    side_count,
+)
+from tactile_kb.finger import builtin_finger
+from tactile_kb.model import ObjectModel, build_model
+from tactile_kb.synthetic import sample_record
+
+FINGER = builtin_finger("33")
+
+Builder = Callable[[np.random.Generator], tuple[trimesh.Trimesh, dict[str, Any]]]
+
+
+def _cube(rng: np.random.Generator) -> tuple[trimesh.Trimesh, dict[str, Any]]:
+    a = rng.uniform(0.06, 0.2)
+    return solids.box(a, a, a), {"kind": "parallel", "congruent": True, "sides": 4}
+
+
+def _box(rng: np.random.Generator) -> tuple[trimesh.Trimesh, dict[str, Any]]:
+    a = rng.uniform(0.08, 0.2)
+    return solids.box(a, a * rng.uniform(0.45, 0.7), a * rng.uniform(0.3, 0.4)), {
+        "kind": "parallel",
+        "congruent": False,
+        "sides": 4,
+    }
+
+
+def _oblique(rng: np.random.Generator) -> tuple[trimesh.Trimesh, dict[str, Any]]:
+    a = rng.uniform(0.08, 0.16)
+    m = solids.parallelepiped(
+        a,
+        a * 0.7,
+        a * 0.5,
+        angle_deg=rng.uniform(55, 70),
+        shear_deg=rng.uniform(0, 10),
+        shear_azimuth_deg=rng.uniform(0, 360),
+    )
+    return m, {"kind": "parallel", "congruent": False, "sides": 4}
+
+
+def _rhombohedron(rng: np.random.Generator) -> tuple[trimesh.Trimesh, dict[str, Any]]:
+    return solids.rhombohedron(rng.uniform(0.07, 0.15), angle_deg=80.0), {
+        "kind": "parallel",
+        "congruent": True,
+        "sides": 4,
+    }
+
+
+def _tetrahedron(rng: np.random.Generator) -> tuple[trimesh.Trimesh, dict[str, Any]]:
+    return solids.tetrahedron(rng.uniform(0.08, 0.2)), {
+        "kind": "apex",
+        "congruent": True,
+        "sides": 3,
+    }
+
+
+def _octahedron(rng: np.random.Generator) -> tuple[trimesh.Trimesh, dict[str, Any]]:
+    # the three overhanging faces are felt only within ±4.6° of an equator sensor's azimuth
+    m = solids.octahedron(rng.uniform(0.08, 0.16))
+    n = m.face_normals[(m.face_normals[:, 2] < -0.1) & (m.face_normals[:, 2] > -0.99)][0]
+    az = math.degrees(math.atan2(n[1], n[0]))
+    turn = round(az / 30.0) * 30.0 - az + rng.uniform(-3, 3) + 30.0 * rng.integers(0, 12)
+    return solids.rotate_about_z(m, turn), {
+        "kind": "none",
+        "congruent": True,
+        "sides": 6,
+        "turned": True,
+    }
+
+
+def _prism(rng: np.random.Generator) -> tuple[trimesh.Trimesh, dict[str, Any]]:
+    n = int(rng.integers(3, 9))
+    r = rng.uniform(0.05, 0.1)
+    return solids.prism(n, r, r * rng.uniform(2.2, 3.0)), {
+        "kind": "parallel",
+        "congruent": False,
+        "sides": n,
+    }
+
+
+def _pyramid(rng: np.random.Generator) -> tuple[trimesh.Trimesh, dict[str, Any]]:
+    n = int(rng.integers(4, 7))
+    r = rng.uniform(0.05, 0.1)
+    apothem = r * math.cos(math.pi / n)
+    while True:  # lateral normals 25°–55° above the horizon; edges clearly unequal
+        h = apothem * math.tan(math.radians(rng.uniform(35, 65)))
+        lateral, base = math.hypot(r, h), 2 * r * math.sin(math.pi / n)
+        if abs(lateral - base) / (lateral + base) > 0.15:
+            break
+    return solids.pyramid(n, r, h), {"kind": "apex", "congruent": False, "sides": n}
+
+
+def _frustum(rng: np.random.Generator) -> tuple[trimesh.Trimesh, dict[str, Any]]:
+    n = int(rng.integers(3, 7))
+    r = rng.uniform(0.06, 0.1)
+    return solids.frustum(n, r, r * rng.uniform(0.4, 0.6), r * rng.uniform(0.5, 0.8)), {
+        "kind": "apex",
+        "congruent": False,
+        "sides": n,
+    }
+
+
+def _cylinder(rng: np.random.Generator) -> tuple[trimesh.Trimesh, dict[str, Any]]:
+    r = rng.uniform(0.03, 0.06)
+    return solids.cylinder(r, rng.uniform(0.06, 0.12)), {"kind": "curved"}
+
+
+def _sphere(rng: np.random.Generator) -> tuple[trimesh.Trimesh, dict[str, Any]]:
+    return solids.sphere(rng.uniform(0.04, 0.07), subdivisions=2), {"kind": "curved"}
+
+
+FAMILIES: dict[str, Builder] = {
+    "cube": _cube,
+    "box": _box,
+    "oblique": _oblique,
+    "rhombohedron": _rhombohedron,
+    "tetrahedron": _tetrahedron,
+    "octahedron": _octahedron,
+    "prism": _prism,
+    "pyramid": _pyramid,
+    "frustum": _frustum,
+}
+
+
+def _truth(mesh: trimesh.Trimesh, info: dict[str, Any]) -> dict[str, Any]:
+    """Counts and feature values computed from the mesh (trimesh) and the family."""
+    planes_list: list[np.ndarray] = []
+    for n in mesh.face_normals:
+        if not any(float(n @ q) > 1 - 1e-9 for q in planes_list):
+            planes_list.append(n)
+    planes = np.asarray(planes_list)
+    sharp = mesh.face_adjacency_angles > 1e-6
+    edges = mesh.face_adjacency_edges[sharp]
+    lengths = np.linalg.norm(mesh.vertices[edges[:, 0]] - mesh.vertices[edges[:, 1]], axis=1)
+    dots = planes @ planes.T
+    angles = np.degrees(mesh.face_adjacency_angles[sharp])
+    return {
+        "faces": len(planes),
+        "edges": len(edges),
+        "vertices": len(np.unique(edges)),
+        "contact": True,
+        "surface_plane": True,
+        "surface_curved": False,
+        "lateral_edges_parallel": info["kind"] == "parallel",
+        "lateral_edges_concurrent": info["kind"] == "apex",
+        "three_pairs": int((np.triu(dots, 1) < -1 + 1e-9).sum()) == 3,
+        "adjacent_faces_perpendicular": bool(np.all(np.abs(angles - 90.0) < 1e-6)),
+        "equal_edges": bool(lengths.max() - lengths.min() < 1e-9),
+        "congruent_faces": info["congruent"],
+        "top_face": bool((planes[:, 2] > 1 - 1e-9).any()),
+        "sides": info["sides"],
+        "normals": planes,
+    }
+
+
+def _model(name: str, seed: int, quantise: bool) -> tuple[ObjectModel, dict[str, Any]]:
+    rng = np.random.default_rng(seed)
+    mesh, info = FAMILIES[name](rng)
+    if not info.get("turned"):
+        mesh = solids.rotate_about_z(mesh, rng.uniform(0, 360))
+    mesh = solids.place(mesh, tuple(rng.uniform(-0.05, 0.05, size=2)))
+    rec = sample_record(
+        mesh, FINGER, per_face=16, quantise=quantise, noise=0.0005 if quantise else 0.0, seed=seed
+    )
+    return build_model(rec), _truth(mesh, info)
+
+
+CASES = [(name, seed, q) for name in FAMILIES for seed in (1, 2, 3) for q in (False, True)]
+
+
+@pytest.mark.parametrize(("name", "seed", "quantise"), CASES)
+def test_family_counts_and_features_equal_the_truth(name: str, seed: int, quantise: bool) -> None:
+    model, truth = _model(name, seed, quantise)
+    p = model.polyhedron
+    assert p is not None, model.open_reason
+    assert (len(p.vertices), len(p.edges), len(p.faces)) == (
+        truth["vertices"],
+        truth["edges"],
+        truth["faces"],
+    )
+    assert len(p.vertices) - len(p.edges) + len(p.faces) == 2
+    got = {
+        n: BUILTIN_FEATURES[n].fn(model)
+        for n in (
+            "contact",
+            "surface_plane",
+            "surface_curved",
+            "lateral_edges_parallel",
+            "lateral_edges_concurrent",
+            "adjacent_faces_perpendicular",
+            "equal_edges",
+            "congruent_faces",
+            "top_face",
+        )
+    }
+    got["three_pairs"] = BUILTIN_FEATURES["parallel_face_pairs"].fn(model, count=3)
+    want = {k: truth[k] for k in got}
+    assert got == want
+    assert side_count(model) == truth["sides"]
+    assert get_feature("face_count").fn(model, equals=truth["faces"])
+    # every face normal matches a true one: exactly in (a), within 2° in (b)
+    limit = 2.0 if quantise else 1e-4
+    for f in model.faces:
+        err = np.degrees(np.arccos(np.clip((truth["normals"] @ f.normal_array).max(), -1, 1)))
+        assert err <= limit, (f, err)
+
+
+@pytest.mark.parametrize("family", [_cylinder, _sphere])
+@pytest.mark.parametrize("quantise", [False, True])
+def test_curved_objects_are_curved(family: Builder, quantise: bool) -> None:
+    rng = np.random.default_rng(7)
+    mesh, _ = family(rng)
+    rec = sample_record(
+        solids.rotate_about_z(mesh, 17.0),
+        FINGER,
+        total=300,
+        quantise=quantise,
+        noise=0.0005 if quantise else 0.0,
+        seed=3,
+    )
+    model = build_model(rec)
+    assert get_feature("surface_curved").fn(model)
+    assert not get_feature("surface_plane").fn(model)
+
+
+def test_value_functions_on_a_box() -> None:
+    mesh = solids.box(0.12, 0.06, 0.04)
+    model = build_model(sample_record(mesh, FINGER, per_face=10, quantise=False, noise=0.0))
+    ang = face_angles(model)
+    assert ang.shape == (6, 6)
+    assert sorted(np.round(ang[0], 6)) == [0.0, 90.0, 90.0, 90.0, 90.0, 180.0]
+    par = parallelism_table(model)
+    assert int(np.triu(par, 1).sum()) == 3
+    perp = perpendicularity_table(model)
+    assert int(np.triu(perp, 1).sum()) == 12
+    section = section_at(model, 0.02)
+    assert section.shape == (4, 2)
+    x, y = section[:, 0], section[:, 1]
+    area = 0.5 * abs(float(np.dot(x, np.roll(y, -1)) - np.dot(np.roll(x, -1), y)))
+    assert abs(area - 0.12 * 0.06) < 1e-9
+    assert lateral_common_point(model) is None  # parallel edges: no finite common point
+
+
+def test_pyramid_apex_is_the_common_point() -> None:
+    mesh = solids.pyramid(5, 0.06, 0.07)
+    model = build_model(sample_record(mesh, FINGER, per_face=10, quantise=False, noise=0.0))
+    found = lateral_common_point(model)
+    assert found is not None
+    point, residual = found
+    assert np.allclose(point, [0.0, 0.0, 0.07], atol=1e-9) or np.allclose(
+        point, [*mesh.vertices[np.argmax(mesh.vertices[:, 2])][:2], 0.07], atol=1e-9
+    )
+    assert residual < 1e-9
+
+
+def test_open_model_features_raise_with_the_reason() -> None:
+    rec = sample_record(solids.box(0.08, 0.08, 0.08), builtin_finger("4"), per_face=4)
+    model = build_model(rec)
+    assert model.polyhedron is None
+    assert get_feature("contact").fn(model)
+    with pytest.raises(
+        GeometryError,
+        match=r"feature 'face_count' needs a closed model: .*open towards \(\+0\.00, \+0\.00, \+1\.00\)",
+    ):
+        get_feature("face_count").fn(model, equals=6)
+
+
+def test_registry_lists_builtins_and_checks_bindings() -> None:
+    names = available_features()
+    for required in (
+        "contact",
+        "surface_curved",
+        "surface_plane",
+        "lateral_edges_parallel",
+        "lateral_edges_concurrent",
+        "face_count",
+        "parallel_face_pairs",
+        "adjacent_faces_perpendicular",
+        "equal_edges",
+        "congruent_faces",
+    ):
+        assert required in names
+    f = get_feature("parallel_face_pairs")
+    assert f.requires == "model"
+    assert f.params == {"count": 3, "min": None, "tolerance_deg": 5.0, "sigmas": 3.0}
+    assert get_feature("contact").requires == "contact"
+    assert check_binding("parallel_face_pairs", {"count": 3, "tolerance_deg": 20}) is None
+    assert check_binding("nope", {}) is not None
+    assert "has no parameter 'tol'" in str(check_binding("equal_edges", {"tol": 1}))
+    assert "must be a number" in str(check_binding("equal_edges", {"rel_tol": "x"}))
+    assert "must be an integer" in str(check_binding("parallel_face_pairs", {"count": 2.5}))
+    assert "needs one of" in str(check_binding("face_count", {}))
+    with pytest.raises(PluginError, match="unknown feature 'nope'"):
+        get_feature("nope")
+
+
+def test_third_party_feature_joins_the_registry() -> None:
+    def tall(model: ObjectModel, *, min_height: float = 0.1) -> bool:
+        """The object is taller than min_height."""
+        p = model.polyhedron
+        return p is not None and float(p.vertices[:, 2].max()) >= min_height
+
+    feature_registry().register("tall_test_only", Feature("tall_test_only", tall, "model", "tall"))
+    model = build_model(
+        sample_record(solids.box(0.05, 0.05, 0.15), FINGER, per_face=6, quantise=False, noise=0.0)
+    )
+    assert evaluate_feature("tall_test_only", model, {"min_height": 0.12})
+    assert not evaluate_feature("tall_test_only", model, {"min_height": 0.2})
+    with pytest.raises(UsageError, match="has no parameter 'height'"):
+        evaluate_feature("tall_test_only", model, {"height": 1})

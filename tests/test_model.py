@@ -1,0 +1,53 @@
+"""The model: full chain from a record, partial records, non-convex objects, saved records."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from tactile_kb import solids
+from tactile_kb.finger import builtin_finger
+from tactile_kb.model import build_model
+from tactile_kb.record import ExplorationRecord
+from tactile_kb.synthetic import sample_layers, sample_record
+
+F33 = builtin_finger("33")
+
+
+def test_model_of_a_saved_and_loaded_record_is_the_same(tmp_path: object) -> None:
+    rec = sample_record(solids.tetrahedron(0.1), F33, per_face=10, seed=8)
+    back = ExplorationRecord.from_json(rec.to_json())
+    a, b = build_model(rec), build_model(back)
+    assert a.polyhedron is not None
+    assert b.polyhedron is not None
+    assert np.allclose(a.polyhedron.vertices, b.polyhedron.vertices)
+    assert a.convex
+    assert len(a.faces) == 4
+
+
+def test_empty_and_partial_records_give_no_polyhedron() -> None:
+    empty = build_model(ExplorationRecord())
+    assert empty.polyhedron is None
+    assert "do not bound" in empty.open_reason
+    assert len(empty.faces) == 1
+    assert empty.faces[0].source == "table"
+    mesh = solids.box(0.1, 0.1, 0.1)
+    rec = sample_record(mesh, F33, per_face=6, quantise=False, noise=0.0)
+    # leave out every contact on the face looking along +x
+    keep = [i for i, c in enumerate(rec.contacts) if c.direction[0] > -0.5]
+    partial = rec.model_copy(update={"contacts": [rec.contacts[i] for i in keep]})
+    m = build_model(partial)
+    assert m.polyhedron is None
+    assert m.open_directions[0] == (1.0, 0.0, 0.0)
+
+
+def test_non_convex_object_keeps_its_convex_envelope_and_layers() -> None:
+    mesh = solids.l_shape(0.1, 0.08, 0.03, 0.04)
+    rec = sample_record(mesh, F33, per_face=10, quantise=False, noise=0.0, seed=3)
+    m = build_model(rec)
+    assert not m.convex
+    assert sum(not s for s in m.supporting) == 2  # the two inner sides
+    assert m.polyhedron is not None
+    assert np.isclose(m.polyhedron.volume, 0.1 * 0.08 * 0.04)  # the bounding box
+    layered = build_model(sample_layers(mesh, builtin_finger("4"), [0.01, 0.03]))
+    assert len(layered.layers) == 2
+    assert len(layered.distinct_planes()) == 6

@@ -1,0 +1,101 @@
+"""End to end: mesh → exploration → model → propositions → Decision, against constructed truth."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+import trimesh
+
+from tactile_kb.errors import ObjectError, RuleFileError, UsageError
+from tactile_kb.pipeline import classify, classify_record, knowledge_base
+from tactile_kb.solids import box, fig5_objects, parallelepiped, tetrahedron
+
+ANSWERS = {
+    "cube": "OBJECT IS A CUBE",
+    "rectangular_parallelepiped": "OBJECT IS A RECTANGULAR PARALLELEPIPED",
+    "nonrectangular_parallelepiped": "OBJECT IS A NONRECTANGULAR PARALLELEPIPED",
+    "not_hexahedron": "OBJECT IS NOT A HEXAHEDRON",
+}
+
+
+@pytest.mark.parametrize(
+    ("name", "mesh", "expected"), fig5_objects(), ids=[o[0] for o in fig5_objects()]
+)
+def test_fig5_objects_get_the_papers_answer(
+    name: str, mesh: trimesh.Trimesh, expected: str
+) -> None:
+    result = classify(mesh)
+    assert result.decision.label == expected
+    assert result.decision.answer == ANSWERS[expected]
+    assert result.decision.certain
+
+
+def test_summary_has_the_documented_keys() -> None:
+    result = classify(box(0.1, 0.06, 0.04))
+    s = result.summary()
+    for key in (
+        "object",
+        "answer",
+        "label",
+        "bits",
+        "propositions",
+        "contacts",
+        "planes",
+        "path_length",
+        "seconds",
+    ):
+        assert key in s
+    assert s["label"] == "rectangular_parallelepiped"
+    assert s["planes"] == 6  # five touched faces and the table
+    assert s["contacts"] == result.record.touches > 0
+    assert s["path_length"] > 0
+    assert set(s["propositions"]) == set(knowledge_base("parallelepipeds").ids)
+
+
+def test_record_round_trip_gives_the_same_decision(tmp_path: Path) -> None:
+    first = classify(parallelepiped(0.12, 0.08, 0.05, angle_deg=70.0, shear_deg=5.0))
+    path = tmp_path / "r.json"
+    first.record.save(path)
+    from tactile_kb.record import ExplorationRecord
+
+    again = classify_record(ExplorationRecord.load(path))
+    assert again.decision.label == first.decision.label == "nonrectangular_parallelepiped"
+    assert again.decision.bits == first.decision.bits
+
+
+def test_noisy_exploration_still_right() -> None:
+    for seed in range(3):
+        assert classify(box(0.09, 0.09, 0.09), noise=0.0005, seed=seed).decision.label == "cube"
+        assert (
+            classify(tetrahedron(0.12), noise=0.0005, seed=seed).decision.label == "not_hexahedron"
+        )
+
+
+def test_polyhedra_rules_name_the_family() -> None:
+    assert classify(tetrahedron(0.1), rules="polyhedra").decision.label == "tetrahedron"
+
+
+def test_contacts_per_phase_grow_with_the_phases() -> None:
+    result = classify(box(0.08, 0.08, 0.08))
+    counts = list(result.contacts_per_phase.values())
+    assert counts[0] >= 1
+    assert counts == sorted(counts)
+
+
+def test_bad_inputs_raise_clear_errors(tmp_path: Path) -> None:
+    with pytest.raises(UsageError, match="noise"):
+        classify(box(0.1, 0.1, 0.1), noise=-1.0)
+    with pytest.raises(ObjectError):
+        classify(tmp_path / "missing.stl")
+    bad = tmp_path / "bad.yaml"
+    bad.write_text(
+        "name: bad\npropositions:\n  - id: A\n    text: contact\n    feature: {name: no_such_feature}\n"
+        "phases:\n  - id: I\n    propositions: [A]\nclasses:\n  - id: touched\n    answer: TOUCHED\n"
+        "    when: A\notherwise:\n  id: none\n  answer: NOTHING\n"
+    )
+    with pytest.raises(RuleFileError) as info:
+        classify(box(0.1, 0.1, 0.1), rules=bad)
+    (problem,) = info.value.problems
+    assert problem.line == 5
+    assert "no_such_feature" in problem.message

@@ -1,0 +1,90 @@
+"""Merging contact planes into one plane per face, refined beyond the sensor resolution."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from tactile_kb import solids
+from tactile_kb.errors import UsageError
+from tactile_kb.finger import builtin_finger
+from tactile_kb.planes import cut_angle, fit_face, merge_planes
+from tactile_kb.record import Contact, ExplorationRecord
+from tactile_kb.synthetic import sample_layers, sample_record
+
+F33 = builtin_finger("33")
+
+
+def test_cut_angle_follows_the_finger() -> None:
+    assert math.isclose(cut_angle(F33.directions), 0.6 * 25.905, rel_tol=1e-3)
+    assert cut_angle(builtin_finger("4").directions) == 20.0
+    assert cut_angle([]) == 15.0
+
+
+@pytest.mark.parametrize("turn", [0.0, 13.0, 47.0])
+def test_quantised_noisy_box_gives_six_refined_faces(turn: float) -> None:
+    mesh = solids.rotate_about_z(solids.box(0.12, 0.08, 0.06), turn)
+    rec = sample_record(mesh, F33, per_face=16, quantise=True, noise=0.0005, seed=5)
+    faces = merge_planes(rec)
+    assert len(faces) == 6
+    assert sorted(f.n_contacts for f in faces) == [0, 16, 16, 16, 16, 16]
+    truth = mesh.face_normals
+    for f in faces:
+        err = math.degrees(math.acos(min(1.0, float((truth @ f.normal_array).max()))))
+        assert err < 2.0
+        if f.source == "contacts":
+            assert f.refined
+            assert 0 < f.residual < 0.001
+            assert 0 < f.normal_uncertainty_deg < 2.0
+    # the sensors alone are off by up to 15°; the planes' offsets are right within a millimetre
+    top = max(faces, key=lambda f: f.normal[2])
+    assert abs(top.offset - 0.06) < 0.001
+    table = [f for f in faces if f.source == "table"]
+    assert table[0].normal == (0.0, 0.0, -1.0)
+    assert table[0].offset == 0.0
+
+
+def test_parallel_faces_at_different_offsets_stay_apart() -> None:
+    mesh = solids.l_shape(0.12, 0.1, 0.04, 0.05)
+    rec = sample_record(mesh, F33, per_face=12, quantise=True, noise=0.0005, seed=2)
+    faces = [f for f in merge_planes(rec) if f.source == "contacts"]
+    # 6 sides (two pairs of them parallel and coplanar-free) + top
+    assert len(faces) == 7
+    xs = sorted(round(f.offset, 3) for f in faces if f.normal[0] > 0.99)
+    assert xs == [-0.02, 0.06]
+
+
+def test_collinear_contacts_keep_the_sensor_plane() -> None:
+    rec = sample_layers(solids.box(0.1, 0.1, 0.05), builtin_finger("4"), [0.02], quantise=True)
+    faces = merge_planes(rec, include_table=False)
+    assert len(faces) == 4
+    for f in faces:
+        assert not f.refined
+        assert abs(abs(f.offset) - 0.05) < 1e-9
+
+
+def test_fit_face_refines_only_when_the_centres_span() -> None:
+    c = np.array([[0, 0, 1.0], [1, 0, 1.0], [0, 1, 1.0], [1, 1, 1.0]])
+    s = np.tile([0.0, 0.26, 0.97], (4, 1))
+    n, off, _res, refined = fit_face(c, s)
+    assert refined
+    assert np.allclose(n, [0, 0, 1])
+    assert math.isclose(off, 1.0)
+    n2, _, _, refined2 = fit_face(c[:2], s[:2])
+    assert not refined2
+    assert abs(n2[0]) < 1e-12
+
+
+def test_table_contacts_are_ignored_and_bad_options_raise() -> None:
+    c = Contact(
+        step=0, centre=(0.2, 0, 0.005), sensors=(0,), direction=(0, 0, -1.0), point=(0.2, 0, 0.0)
+    )
+    rec = ExplorationRecord(
+        finger="33", tip_radius=0.005, sensor_directions=list(F33.directions), contacts=[c]
+    )
+    faces = merge_planes(rec)
+    assert [f.source for f in faces] == ["table"]
+    with pytest.raises(UsageError, match="cut_deg"):
+        merge_planes(rec, cut_deg=100)
