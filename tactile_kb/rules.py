@@ -348,7 +348,7 @@ def parse_rules(text: str, file: str = "<string>") -> RuleSet:
         Listing every problem found, each located at ``file:line:column``; ``excerpt`` shows
         the source around the first one.
     """
-    return _build(load_yaml(text, file=file, error_cls=RuleFileError))
+    return _build(load_yaml(text, file=file, error_cls=RuleFileError, keep_going=True))
 
 
 def load_rules(name_or_path: str | Path) -> RuleSet:
@@ -366,7 +366,7 @@ def load_rules(name_or_path: str | Path) -> RuleSet:
         packaged rule sets.
     """
     if isinstance(name_or_path, Path):
-        return _build(load_yaml(name_or_path, error_cls=RuleFileError))
+        return _build(load_yaml(name_or_path, error_cls=RuleFileError, keep_going=True))
     text = str(name_or_path)
     looks_like_name = "/" not in text and "\\" not in text
     if looks_like_name:
@@ -376,7 +376,7 @@ def load_rules(name_or_path: str | Path) -> RuleSet:
             return _load_traversable(packaged)
     path = Path(text)
     if path.is_file():
-        return _build(load_yaml(path, error_cls=RuleFileError))
+        return _build(load_yaml(path, error_cls=RuleFileError, keep_going=True))
     known = ", ".join(available_rule_sets()) or "(none found)"
     raise UsageError(
         f"no rule file {text!r} and no packaged rule set of that name; packaged rule sets: {known}"
@@ -421,7 +421,7 @@ def _packaged() -> dict[str, Traversable]:
 
 def _load_traversable(entry: Traversable) -> RuleSet:
     if isinstance(entry, Path):
-        return _build(load_yaml(entry, error_cls=RuleFileError))
+        return _build(load_yaml(entry, error_cls=RuleFileError, keep_going=True))
     text = entry.read_text(encoding="utf-8")  # pragma: no cover - zipped installs only
     return parse_rules(text, file=str(entry))  # pragma: no cover
 
@@ -431,7 +431,7 @@ def _build(src: Source) -> RuleSet:
         what = "empty" if src.data is None else f"{_kind(src.data)}, not a mapping"
         msg = f"the rule file is {what}: it needs name, propositions, phases, classes, otherwise"
         raise RuleFileError([Problem(src.file, 1, 1, "", msg)], src.excerpt(1, 1))
-    problems: list[Problem] = []
+    problems: list[Problem] = list(src.problems)  # duplicate keys, reported with the rest
     model: _RuleFileModel | None = None
     try:
         model = validate(src, _RuleFileModel, error_cls=RuleFileError)

@@ -43,18 +43,28 @@ _FLOAT = re.compile(
 )
 
 
-class _Core12Loader(yaml.SafeLoader):
+# libyaml's parser when PyYAML was built with it (about 5x faster), else the pure-Python one;
+# both give the same nodes and marks. Resolution stays in Python, so the schema below holds.
+_BaseLoader: type[yaml.SafeLoader] = getattr(yaml, "CSafeLoader", yaml.SafeLoader)
+
+
+class _Core12Loader(_BaseLoader):  # type: ignore[valid-type,misc]
     """A loader whose implicit resolvers follow the YAML 1.2 core schema (no yes/no/on/off)."""
 
 
-_Core12Loader.yaml_implicit_resolvers = {}
-for _tag, _rx, _first in [
-    ("tag:yaml.org,2002:bool", _BOOL, list("tTfF")),
-    ("tag:yaml.org,2002:null", _NULL, ["~", "n", "N", ""]),
-    ("tag:yaml.org,2002:int", _INT, list("-+0123456789")),
-    ("tag:yaml.org,2002:float", _FLOAT, list("-+0123456789.")),
-]:
-    _Core12Loader.add_implicit_resolver(_tag, _rx, _first)
+class _Core12PyLoader(yaml.SafeLoader):
+    """The same schema on the pure-Python parser, whose syntax messages are more specific."""
+
+
+for _loader in (_Core12Loader, _Core12PyLoader):
+    _loader.yaml_implicit_resolvers = {}
+    for _tag, _rx, _first in [
+        ("tag:yaml.org,2002:bool", _BOOL, list("tTfF")),
+        ("tag:yaml.org,2002:null", _NULL, ["~", "n", "N", ""]),
+        ("tag:yaml.org,2002:int", _INT, list("-+0123456789")),
+        ("tag:yaml.org,2002:float", _FLOAT, list("-+0123456789.")),
+    ]:
+        _loader.add_implicit_resolver(_tag, _rx, _first)
 
 
 @dataclass(frozen=True)
@@ -67,6 +77,8 @@ class Source:
     positions: dict[PathT, tuple[int, int]] = field(default_factory=dict)
     key_positions: dict[PathT, tuple[int, int]] = field(default_factory=dict)
     scalar_offsets: dict[PathT, int] = field(default_factory=dict)
+    problems: tuple[Problem, ...] = ()
+    """Structural problems (duplicate keys, unsupported keys) kept with ``keep_going=True``."""
 
     def locate(self, path: Iterable[str | int], *, key: bool = False) -> tuple[int, int]:
         """Line and column of the value at ``path`` (of its key with ``key=True``).
@@ -144,11 +156,15 @@ def load_yaml(
     *,
     file: str | None = None,
     error_cls: type[SourceError] = SourceError,
+    keep_going: bool = False,
 ) -> Source:
     """Compose YAML from a path or from text and return a :class:`Source`.
 
-    A ``Path`` is read from disk; a ``str`` is YAML text (name it with ``file``). Syntax errors,
-    duplicate keys, anchors/aliases and non-scalar keys raise ``error_cls`` listing every problem.
+    A ``Path`` is read from disk; a ``str`` is YAML text (name it with ``file``). Syntax errors
+    raise ``error_cls``. Duplicate keys, merge keys and non-scalar keys raise ``error_cls``
+    listing every one, or with ``keep_going=True`` are returned in :attr:`Source.problems` (the
+    first occurrence of a duplicated key is kept) so that a caller can report them together
+    with its own validation problems.
     """
     if isinstance(source, Path):
         name = file or str(source)
@@ -163,7 +179,10 @@ def load_yaml(
     else:
         name, text = file or "<string>", source
     try:
-        node = yaml.compose(text, Loader=_Core12Loader)
+        try:
+            node = yaml.compose(text, Loader=_Core12Loader)
+        except yaml.MarkedYAMLError:
+            node = yaml.compose(text, Loader=_Core12PyLoader)  # raises with the clearer message
     except yaml.MarkedYAMLError as exc:
         mark = exc.problem_mark or exc.context_mark
         line, col = (mark.line + 1, mark.column + 1) if mark else (0, 0)
@@ -175,10 +194,18 @@ def load_yaml(
         raise error_cls([Problem(name, 0, 0, "", f"YAML error: {exc}")]) from None
     builder = _Builder(name)
     data = None if node is None else builder.build(node, ())
-    if builder.problems:
+    if builder.problems and not keep_going:
         first = builder.problems[0]
         raise error_cls(builder.problems, render_excerpt(text, first.line, first.column))
-    return Source(name, text, data, builder.positions, builder.key_positions, builder.offsets)
+    return Source(
+        name,
+        text,
+        data,
+        builder.positions,
+        builder.key_positions,
+        builder.offsets,
+        tuple(builder.problems),
+    )
 
 
 class _Builder:

@@ -784,3 +784,13 @@ def test_packaged_base_compiles_cleanly_with_the_papers_cube(kb: RuleSet) -> Non
     cube = next(c for c in compiled.classes if c.id == "cube")
     assert cube.paper == "A·B\u0304·C·D·E\u0304·F·G" + "·H·J"  # eq. (3), then the enlargement
     assert cube.bits == ("101101111",)
+
+
+def test_duplicate_keys_are_reported_together_with_other_problems() -> None:
+    text = edit("    text: Surface is plane\n", "    text: Surface is plane\n    text: again\n")
+    text = edit("    when: A & B\n", "    when: A & Q\n", text)
+    assert problems(text) == [
+        f"{where(text, 'text: again')}: propositions[2].text: duplicate key 'text' (first at line "
+        f"{at(text, 'text: Surface is plane')[0]})",
+        f"{where(text, 'A & Q', shift=4)}: classes[1].when: unknown proposition 'Q'",
+    ]

@@ -108,3 +108,9 @@ def test_problem_str_forms() -> None:
     assert str(Problem("f.yaml", 0, 0, "", "cannot read")) == "f.yaml: cannot read"
     w = Problem("f.yaml", 3, 4, "classes[1]", "dead class", "warning")
     assert str(w) == "f.yaml:3:4: warning: classes[1]: dead class"
+
+
+def test_keep_going_returns_structural_problems_with_the_data() -> None:
+    src = load_yaml("a: 1\nb: 2\na: 3\n", file="k.yaml", keep_going=True)
+    assert src.data == {"a": 1, "b": 2}
+    assert [str(p) for p in src.problems] == ["k.yaml:3:1: a: duplicate key 'a' (first at line 1)"]
