@@ -7,14 +7,15 @@ import json
 import math
 import sys
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from tactile_kb.errors import TactileKBError, UsageError
-from tactile_kb.explorers import explorer_registry, get_explorer
-from tactile_kb.features import feature_registry
-from tactile_kb.finger import load_finger
-from tactile_kb.pipeline import Classification, classify, classify_record, knowledge_base
-from tactile_kb.record import ExplorationRecord
+
+if TYPE_CHECKING:
+    from tactile_kb.pipeline import Classification
+
+# The heavy stack (trimesh, scipy, sympy, dd) is imported inside the handlers, so that
+# `tactile-kb --help` and the rule-file commands start quickly.
 
 __all__ = ["register"]
 
@@ -102,6 +103,11 @@ def _classify(args: argparse.Namespace) -> int:
         raise UsageError("classify needs at least one PATH or --record RECORD.json")
     if args.plot and Path(args.plot).suffix.lower() not in (".png", ".svg"):
         raise UsageError(f"--plot {args.plot}: the file must end in .png or .svg")
+    from tactile_kb.explorers import get_explorer
+    from tactile_kb.finger import load_finger
+    from tactile_kb.pipeline import classify, classify_record, knowledge_base
+    from tactile_kb.record import ExplorationRecord
+
     # Everything shared by the objects is checked before the first one is touched.
     kb = knowledge_base(args.rules)
     explorer = get_explorer(args.explorer) if args.paths else None
@@ -141,6 +147,9 @@ def _explore(args: argparse.Namespace) -> int:
     out = Path(args.out)
     if not out.parent.exists():
         raise UsageError(f"--out {args.out}: directory {str(out.parent)!r} does not exist")
+    from tactile_kb.explorers import get_explorer
+    from tactile_kb.finger import load_finger
+
     explorer = get_explorer(args.explorer)
     record = explorer.explore(
         args.path, finger=load_finger(args.finger), seed=args.seed, noise=args.noise
@@ -154,6 +163,8 @@ def _explore(args: argparse.Namespace) -> int:
 
 
 def _demo(args: argparse.Namespace) -> int:
+    from tactile_kb.explorers import get_explorer
+    from tactile_kb.pipeline import classify, knowledge_base
     from tactile_kb.solids import fig5_objects
 
     kb = knowledge_base("parallelepipeds")
@@ -174,7 +185,8 @@ def _demo(args: argparse.Namespace) -> int:
 
 
 def _plugins(args: argparse.Namespace) -> int:
-    from tactile_kb.explorers import available_explorers
+    from tactile_kb.explorers import available_explorers, explorer_registry
+    from tactile_kb.features import feature_registry
 
     available_explorers()  # registers the built-in in an uninstalled checkout
     for kind, registry in (("explorer", explorer_registry), ("feature", feature_registry())):
