@@ -74,6 +74,10 @@ _EXPORTS: dict[str, str] = {
     "Feature": "tactile_kb.features",
     "available_features": "tactile_kb.features",
     "get_feature": "tactile_kb.features",
+    # act: grasping by the minimal angle of prehension
+    "GraspCandidate": "tactile_kb.grasp",
+    "GraspPlan": "tactile_kb.grasp",
+    "plan_grasp": "tactile_kb.grasp",
     # end to end
     "Classification": "tactile_kb.pipeline",
     "classify": "tactile_kb.pipeline",
@@ -92,6 +96,8 @@ __all__ = [
     "Feature",
     "Finger",
     "GeometryError",
+    "GraspCandidate",
+    "GraspPlan",
     "KnowledgeBase",
     "Layer",
     "LayoutFileError",
@@ -128,6 +134,7 @@ __all__ = [
     "merge_planes",
     "parse_expr",
     "parse_rules",
+    "plan_grasp",
     "polyhedron_from_planes",
     "sample_record",
 ]
@@ -155,6 +162,7 @@ if TYPE_CHECKING:
     from tactile_kb.expr import parse_expr
     from tactile_kb.features import Feature, available_features, get_feature
     from tactile_kb.finger import Finger, builtin_finger, load_finger
+    from tactile_kb.grasp import GraspCandidate, GraspPlan, plan_grasp
     from tactile_kb.model import ObjectModel, build_model
     from tactile_kb.objects import load_object
     from tactile_kb.pipeline import Classification, classify, classify_record

@@ -1,10 +1,234 @@
-"""Subcommands of ``tactile-kb`` (being built; see tactile_kb/cli/__init__.py)."""
+"""Subcommands for grasps and pictures: ``grasp``, ``plot``, ``tree``.
+
+``tactile-kb grasp PATH... [--json] [--plot FILE]`` explores each object (or loads a saved
+record with ``--record``) and plans a two-finger grasp on parallel faces in line with the centre
+of mass; exit 1 when an object cannot be explored or has no grasp (the reason is printed).
+``tactile-kb plot RECORD.json --out FILE.png`` draws a saved exploration;
+``tactile-kb tree RULES --out FILE.png [--bits 101101111]`` draws a rule file's choice tree.
+"""
 
 from __future__ import annotations
 
 import argparse
+import json
+import math
+import sys
+from pathlib import Path
 from typing import Any
+
+from tactile_kb.errors import TactileKBError, UsageError
+
+__all__ = ["register"]
+
+
+def _positive(text: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"not a number: {text!r}") from None
+    if not math.isfinite(value) or value < 0:
+        raise argparse.ArgumentTypeError(f"must be a finite number ≥ 0, got {text!r}")
+    return value
+
+
+def _size(text: str) -> tuple[float, float]:
+    parts = text.lower().split("x")
+    try:
+        w, h = (float(p) for p in parts)
+    except ValueError:
+        raise argparse.ArgumentTypeError(
+            f"a size is WIDTHxHEIGHT in inches, e.g. 6.4x4.8, not {text!r}"
+        ) from None
+    if not (math.isfinite(w) and math.isfinite(h) and w > 0 and h > 0):
+        raise argparse.ArgumentTypeError(f"a size must be positive, got {text!r}")
+    return (w, h)
+
+
+def _picture_options(p: argparse.ArgumentParser, default: tuple[float, float]) -> None:
+    p.add_argument(
+        "--size",
+        type=_size,
+        default=default,
+        metavar="WxH",
+        help=f"figure size in inches (default: {default[0]}x{default[1]})",
+    )
+    p.add_argument("--dpi", type=_positive, default=100.0, help="dots per inch (default: 100)")
+
+
+def _check_picture(path: str, flag: str) -> None:
+    from tactile_kb.plot import FORMATS
+
+    p = Path(path)
+    if p.suffix.lower() not in FORMATS:
+        raise UsageError(f"{flag} {path}: the file must end in {', '.join(FORMATS)}")
+    if not p.parent.exists():
+        raise UsageError(f"{flag} {path}: directory {str(p.parent)!r} does not exist")
 
 
 def register(sub: argparse._SubParsersAction[Any]) -> None:
-    """Add this module's subcommands to ``sub``."""
+    """Add ``grasp``, ``plot`` and ``tree``."""
+    p = sub.add_parser("grasp", help="explore objects and plan a two-finger grasp")
+    p.add_argument("paths", nargs="*", metavar="PATH", help="mesh files (STL, OBJ, PLY), metres")
+    p.add_argument(
+        "--record",
+        action="append",
+        default=[],
+        metavar="RECORD.json",
+        help="plan on a saved exploration record instead (repeatable)",
+    )
+    p.add_argument("--explorer", default="stepper", help="explorer plugin (default: stepper)")
+    p.add_argument("--finger", default="33", help="finger layout: 4, 33 or a YAML file")
+    p.add_argument("--noise", type=_positive, default=0.0, help="σ of position noise, metres")
+    p.add_argument("--seed", type=int, default=0, help="seed of the exploration (default: 0)")
+    p.add_argument("--mu", type=_positive, default=0.5, help="friction coefficient (default 0.5)")
+    p.add_argument(
+        "--max-opening",
+        type=_positive,
+        default=0.15,
+        metavar="METRES",
+        help="widest jaw opening of the pincers (default: 0.15)",
+    )
+    p.add_argument(
+        "--margin",
+        type=_positive,
+        default=0.005,
+        metavar="METRES",
+        help="grasp points at least this far inside their faces (default: 0.005)",
+    )
+    p.add_argument(
+        "--mass", type=_positive, default=None, help="object mass, kg (default: 1000 kg/m³)"
+    )
+    p.add_argument("--json", action="store_true", help="one JSON object per line and per object")
+    p.add_argument("--plot", metavar="FILE", help="draw each object and its grasp (PNG or SVG)")
+    _picture_options(p, (6.4, 4.8))
+    p.set_defaults(func=_grasp)
+
+    p = sub.add_parser("plot", help="draw a saved exploration record")
+    p.add_argument("record", metavar="RECORD.json")
+    p.add_argument("--out", required=True, metavar="FILE", help="picture file (.png, .svg, .pdf)")
+    p.add_argument("--mesh", metavar="MESH", help="the explored object, drawn faintly")
+    p.add_argument("--no-grasp", action="store_true", help="do not plan and draw a grasp")
+    _picture_options(p, (6.4, 4.8))
+    p.set_defaults(func=_plot)
+
+    p = sub.add_parser("tree", help="draw a rule file's choice tree")
+    p.add_argument("rules", metavar="RULES", help="rule set name or YAML file")
+    p.add_argument("--out", required=True, metavar="FILE", help="picture file (.png, .svg, .pdf)")
+    p.add_argument(
+        "--bits", metavar="BITS", help="truth values in declared order; highlights their path"
+    )
+    _picture_options(p, (9.6, 6.4))
+    p.set_defaults(func=_tree)
+
+
+def _plot_path(base: str, index: int, count: int, name: str) -> Path:
+    path = Path(base)
+    if count == 1:
+        return path
+    stem = Path(name).stem or f"object{index}"
+    return path.with_name(f"{path.stem}-{stem}{path.suffix}")
+
+
+def _line(plan: Any) -> str:
+    b = plan.best
+    if b is None:
+        return f"{plan.object}- NO GRASP: {plan.reason}"
+    force = "cannot hold" if b.least_force is None else f"{b.least_force:.2f} N"
+    return (
+        f"{plan.object}- GRASP faces {b.faces[0]} and {b.faces[1]}: opening {b.width * 1000:.1f} mm, "
+        f"planes {b.angle_deg:.1f}° apart, {b.com_offset * 1000:.1f} mm from the centre of mass, "
+        f"ε = {b.quality:.3f}, least force {force}"
+    )
+
+
+def _grasp(args: argparse.Namespace) -> int:
+    from tactile_kb.explorers import get_explorer
+    from tactile_kb.finger import load_finger
+    from tactile_kb.grasp import plan_grasp
+    from tactile_kb.model import build_model
+    from tactile_kb.record import ExplorationRecord
+
+    if not args.paths and not args.record:
+        raise UsageError("grasp needs at least one PATH or --record RECORD.json")
+    if args.plot:
+        _check_picture(args.plot, "--plot")
+    explorer = get_explorer(args.explorer) if args.paths else None
+    finger = load_finger(args.finger)
+    items = [(p, False) for p in args.paths] + [(r, True) for r in args.record]
+    failed = 0
+    for index, (item, is_record) in enumerate(items):
+        try:
+            if is_record:
+                record = ExplorationRecord.load(item)
+            else:
+                assert explorer is not None
+                record = explorer.explore(item, finger=finger, seed=args.seed, noise=args.noise)
+            model = build_model(record)
+            plan = plan_grasp(
+                model,
+                mu=args.mu,
+                max_opening=args.max_opening,
+                margin=args.margin,
+                mass=args.mass,
+            )
+            if args.plot:
+                from tactile_kb.plot import plot_exploration
+
+                plot_exploration(
+                    model,
+                    _plot_path(args.plot, index, len(items), item),
+                    grasp=plan,
+                    size=args.size,
+                    dpi=args.dpi,
+                )
+        except TactileKBError as exc:
+            failed += 1
+            print(f"tactile-kb: error: {item}: {exc}", file=sys.stderr, flush=True)
+            continue
+        if not plan.ok:
+            failed += 1
+        if args.json:
+            out = plan.to_dict()
+            out["object"] = plan.object or item
+            print(json.dumps(out), flush=True)
+        else:
+            print(_line(plan), flush=True)
+    return 1 if failed else 0
+
+
+def _plot(args: argparse.Namespace) -> int:
+    from tactile_kb.plot import plot_exploration
+    from tactile_kb.record import ExplorationRecord
+
+    _check_picture(args.out, "--out")
+    record = ExplorationRecord.load(args.record)
+    mesh = None
+    if args.mesh:
+        from tactile_kb.objects import load_object
+
+        mesh = load_object(args.mesh)
+    plot_exploration(
+        record, args.out, mesh=mesh, grasp=not args.no_grasp, size=args.size, dpi=args.dpi
+    )
+    print(f"{args.record}: {record.touches} touches → {args.out}")
+    return 0
+
+
+def _tree(args: argparse.Namespace) -> int:
+    from tactile_kb.compiler import compile_rules
+    from tactile_kb.plot import plot_tree
+
+    _check_picture(args.out, "--out")
+    kb = compile_rules(args.rules)
+    decision = None
+    if args.bits is not None:
+        bits = args.bits.strip()
+        if len(bits) != kb.n or any(ch not in "01-" for ch in bits):
+            raise UsageError(
+                f"--bits {args.bits!r}: give {kb.n} characters 0, 1 or - (for {', '.join(kb.ids)})"
+            )
+        decision = kb.classify(bits)
+    plot_tree(kb, args.out, decision=decision, size=args.size, dpi=args.dpi)
+    tail = f": {decision.answer}" if decision is not None else ""
+    print(f"{kb.rules.name} → {args.out}{tail}")
+    return 0

@@ -1,0 +1,621 @@
+"""Pictures of what the finger found: the path, the contacts, the model, the grasp, the tree.
+
+Every function builds a :class:`matplotlib.figure.Figure` of its own (never pyplot, so no
+global state leaks between calls and nothing needs a display), returns it, and writes it to
+``path`` when one is given, as PNG, SVG or PDF by the file's extension. The figure is exactly
+``size`` inches at ``dpi`` (640 × 480 pixels by default).
+
+* :func:`plot_exploration`: the object mesh (faint, when given), the finger's path, its
+  contacts coloured by the sensor that fired, the reconstructed polyhedron, the chosen grasp;
+  for objects explored in layers, a second panel with the contour polygon of each layer.
+* :func:`plot_tree`: a rule file's choice tree (the paper's Fig. 3): the phases in order, the
+  values of their propositions on each branch, the classes at the leaves, with the path a
+  decision took highlighted.
+* :func:`plot_classification`: what ``tactile-kb classify --plot`` draws for a result of
+  :func:`tactile_kb.pipeline.classify`.
+
+Examples
+--------
+>>> from tactile_kb.finger import builtin_finger
+>>> from tactile_kb.solids import box
+>>> from tactile_kb.synthetic import sample_record
+>>> fig = plot_exploration(sample_record(box(0.1, 0.06, 0.04), builtin_finger("33"), seed=1))
+>>> [round(float(v)) for v in fig.get_size_inches() * fig.dpi]
+[640, 480]
+"""
+
+from __future__ import annotations
+
+import textwrap
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+from matplotlib.colors import Normalize
+from matplotlib.figure import Figure
+from matplotlib.patches import FancyBboxPatch
+from mpl_toolkits.mplot3d.art3d import (  # type: ignore[import-untyped]
+    Line3DCollection,
+    Poly3DCollection,
+)
+
+from tactile_kb.errors import UsageError
+from tactile_kb.grasp import GraspPlan
+from tactile_kb.model import ObjectModel, build_model
+from tactile_kb.record import ExplorationRecord
+
+if TYPE_CHECKING:
+    import trimesh
+
+    from tactile_kb.compiler import KnowledgeBase
+    from tactile_kb.engine import Decision
+    from tactile_kb.rules import RuleSet
+
+__all__ = [
+    "FORMATS",
+    "TreeNode",
+    "choice_tree",
+    "plot_classification",
+    "plot_exploration",
+    "plot_tree",
+    "save_figure",
+]
+
+FORMATS = {".png": "png", ".svg": "svg", ".pdf": "pdf"}
+"""File extensions :func:`save_figure` writes, and their formats."""
+
+DEFAULT_SIZE = (6.4, 4.8)
+DEFAULT_DPI = 100
+TREE_MINTERM_LIMIT = 1 << 14
+"""The choice tree enumerates r(L) up to this many minterms; beyond, only the phases show."""
+TREE_LEAF_LIMIT = 48
+
+_TREE_RIGHT = 0.70  # x of the last phase column (axes fraction)
+_TREE_LEAF = 0.76  # x where the answers begin
+_LEAF_CHARS = 26
+_DISCRETE_SENSORS = 8  # up to this many sensors get legend entries instead of a colour bar
+_HIGHLIGHT = "#e66100"
+_MODEL = "#1f5fbf"
+_GRASP = "#c01c28"
+
+
+def _figure(size: tuple[float, float], dpi: float) -> Figure:
+    if len(size) != 2 or min(size) <= 0 or dpi <= 0:
+        raise UsageError(f"a figure needs a positive size and dpi, got {size} at {dpi}")
+    return Figure(figsize=size, dpi=dpi)
+
+
+def save_figure(fig: Figure, path: str | Path, *, dpi: float | None = None) -> Path:
+    """Write ``fig`` to ``path`` (.png, .svg or .pdf) at its own size; return the path."""
+    p = Path(path)
+    fmt = FORMATS.get(p.suffix.lower())
+    if fmt is None:
+        known = ", ".join(FORMATS)
+        raise UsageError(f"{p}: cannot write a picture with suffix {p.suffix!r} (use {known})")
+    if not p.parent.exists():
+        raise UsageError(f"{p}: the directory {p.parent} does not exist")
+    fig.savefig(p, format=fmt, dpi=dpi if dpi is not None else fig.dpi)
+    return p
+
+
+# ---------------------------------------------------------------------------------------------
+# Exploration, model and grasp
+# ---------------------------------------------------------------------------------------------
+
+
+def _sensor_of(record: ExplorationRecord) -> np.ndarray[Any, np.dtype[np.int64]]:
+    out = []
+    for c in record.contacts:
+        s = c.sensor if c.sensor >= 0 else (c.sensors[0] if c.sensors else 0)
+        out.append(s)
+    return np.asarray(out, dtype=np.int64)
+
+
+def _set_equal(ax: Any, points: np.ndarray[Any, np.dtype[np.float64]]) -> None:
+    lo, hi = points.min(axis=0), points.max(axis=0)
+    centre, half = (lo + hi) / 2.0, max(float((hi - lo).max()) / 2.0, 1e-3) * 1.05
+    ax.set_xlim(centre[0] - half, centre[0] + half)
+    ax.set_ylim(centre[1] - half, centre[1] + half)
+    ax.set_zlim(max(centre[2] - half, lo[2] - 0.002), centre[2] + half)
+    ax.set_box_aspect((1.0, 1.0, 1.0), zoom=1.15)
+
+
+def _draw_3d(
+    ax: Any,
+    record: ExplorationRecord,
+    model: ObjectModel | None,
+    mesh: trimesh.Trimesh | None,
+    grasp: GraspPlan | None,
+    fig: Figure,
+    layered: bool = False,
+) -> None:
+    extent: list[np.ndarray[Any, np.dtype[np.float64]]] = []
+    if mesh is not None:
+        tris = np.asarray(mesh.vertices)[np.asarray(mesh.faces)]
+        ax.add_collection3d(Poly3DCollection(tris, facecolor="0.55", edgecolor="none", alpha=0.18))
+        extent.append(np.asarray(mesh.vertices, dtype=float))
+    if record.path:
+        path = np.asarray(record.path, dtype=float)
+        ax.plot(path[:, 0], path[:, 1], path[:, 2], color="0.45", lw=0.6, label="finger path")
+        extent.append(path)
+    if record.contacts:
+        pts = np.asarray([c.point for c in record.contacts], dtype=float)
+        sensors = _sensor_of(record)
+        count = max(len(record.sensor_directions), int(sensors.max()) + 1, 1)
+        norm = Normalize(0, max(count - 1, 1))
+        if count <= _DISCRETE_SENSORS:  # a few sensors: one legend entry each
+            from matplotlib import colormaps
+
+            cmap = colormaps["turbo"]
+            for k in sorted(set(sensors.tolist())):
+                sel = sensors == k
+                ax.scatter(
+                    pts[sel, 0],
+                    pts[sel, 1],
+                    pts[sel, 2],
+                    color=cmap(norm(k)),
+                    s=14,
+                    depthshade=False,
+                    label=f"sensor {k}",
+                )
+        else:
+            sc = ax.scatter(
+                pts[:, 0],
+                pts[:, 1],
+                pts[:, 2],
+                c=sensors,
+                cmap="turbo",
+                norm=norm,
+                s=14,
+                depthshade=False,
+                label="contacts",
+            )
+            pos = ax.get_position()
+            ax.set_position((pos.x0, pos.y0, pos.width * 0.84, pos.height))
+            x = pos.x0 + pos.width * 0.86 if layered else pos.x1 + 0.01
+            cax = fig.add_axes((x, pos.y0 + 0.3 * pos.height, 0.012, 0.4 * pos.height))
+            bar = fig.colorbar(sc, cax=cax, orientation="vertical")
+            bar.set_label("sensor that fired", fontsize=6, labelpad=1)
+            bar.ax.tick_params(labelsize=6)
+        extent.append(pts)
+    poly = model.polyhedron if model is not None else None
+    if poly is not None:
+        segs = [poly.vertices[[i, j]] for i, j in poly.edges]
+        ax.add_collection3d(Line3DCollection(segs, colors=_MODEL, linewidths=1.2))
+        ax.plot([], [], [], color=_MODEL, lw=1.2, label="polyhedron")
+        extent.append(np.asarray(poly.vertices, dtype=float))
+    if grasp is not None and grasp.best is not None:
+        p = np.asarray(grasp.best.points, dtype=float)
+        n = np.asarray(grasp.best.normals, dtype=float)
+        ax.plot(p[:, 0], p[:, 1], p[:, 2], color=_GRASP, lw=1.5, ls="--")
+        ax.scatter(p[:, 0], p[:, 1], p[:, 2], color=_GRASP, s=40, marker="o", depthshade=False)
+        jaw = 0.25 * max(grasp.best.width, 0.02)
+        for q, m in zip(p, n, strict=True):
+            start = q + jaw * m
+            ax.quiver(*start, *(-jaw * m), color=_GRASP, lw=2.0, arrow_length_ratio=0.3)
+        ax.plot([], [], [], color=_GRASP, lw=1.5, label="grasp")
+        if grasp.com is not None:
+            c = np.asarray(grasp.com)
+            ax.scatter([c[0]], [c[1]], [c[2]], color="k", marker="x", s=30, depthshade=False)
+    if extent:
+        _set_equal(ax, np.vstack(extent))
+    ax.set_xlabel("x (m)", fontsize=7, labelpad=-2)
+    ax.set_ylabel("y (m)", fontsize=7, labelpad=-2)
+    ax.set_zlabel("z (m)", fontsize=7, labelpad=-2)
+    ax.tick_params(labelsize=5, pad=0)
+    ax.legend(loc="upper left", fontsize=6, frameon=False)
+
+
+def _draw_layers(ax: Any, model: ObjectModel) -> None:
+    layers = [lay for lay in model.layers if len(lay.contour) >= 3]
+    colours = Normalize(0, max(len(layers) - 1, 1))
+    from matplotlib import colormaps
+
+    cmap = colormaps["viridis"]
+    for k, lay in enumerate(layers):
+        c = np.asarray(lay.contour, dtype=float)
+        loop = np.vstack([c, c[:1]]) if lay.closed else c
+        ax.plot(
+            loop[:, 0],
+            loop[:, 1],
+            color=cmap(colours(k)),
+            lw=1.2,
+            marker="o",
+            ms=2.5,
+            label=f"z = {lay.z * 1000:.0f} mm ({len(c)} corners)",
+        )
+    rec = model.record
+    for rec_layer in rec.layers:
+        if rec_layer.path:
+            p = np.asarray(rec_layer.path, dtype=np.float64)
+            ax.plot(p[:, 0], p[:, 1], color="0.7", lw=0.5)
+    ax.set_aspect("equal", adjustable="datalim")
+    ax.set_title("layer contours", fontsize=8)
+    ax.set_xlabel("x (m)", fontsize=7)
+    ax.set_ylabel("y (m)", fontsize=7)
+    ax.tick_params(labelsize=6)
+    if layers:
+        ax.legend(fontsize=6, frameon=False, loc="best")
+
+
+def plot_exploration(
+    record_or_model: ExplorationRecord | ObjectModel,
+    path: str | Path | None = None,
+    *,
+    mesh: trimesh.Trimesh | None = None,
+    grasp: GraspPlan | bool | None = None,
+    title: str | None = None,
+    size: tuple[float, float] = DEFAULT_SIZE,
+    dpi: float = DEFAULT_DPI,
+) -> Figure:
+    """Draw an exploration: mesh, path, contacts by sensor, polyhedron, grasp, layer contours.
+
+    Parameters
+    ----------
+    record_or_model
+        An exploration record (its model is built) or a model.
+    path
+        Write the figure there (.png, .svg or .pdf) when given.
+    mesh
+        The true object, drawn faintly (a record does not carry it).
+    grasp
+        A plan to draw, or True to plan one with :func:`tactile_kb.grasp.plan_grasp`.
+    title
+        Default: the object's name, its contact and face counts.
+    size, dpi
+        Figure size in inches and its resolution.
+    """
+    if isinstance(record_or_model, ObjectModel):
+        model = record_or_model
+    elif isinstance(record_or_model, ExplorationRecord):
+        model = build_model(record_or_model)
+    else:
+        raise UsageError(
+            f"plot_exploration needs a record or a model, got {type(record_or_model).__name__}"
+        )
+    record = model.record
+    plan: GraspPlan | None
+    if grasp is True:
+        from tactile_kb.grasp import plan_grasp
+
+        plan = plan_grasp(model)
+    elif isinstance(grasp, GraspPlan):
+        plan = grasp
+    else:
+        plan = None
+    fig = _figure(size, dpi)
+    layered = any(len(lay.contour) >= 3 for lay in model.layers) and (
+        model.polyhedron is None or not model.convex
+    )
+    if layered:
+        grid = fig.add_gridspec(1, 2, width_ratios=(1.35, 1.0), wspace=0.4)
+        ax3 = fig.add_subplot(grid[0, 0], projection="3d")
+        ax2 = fig.add_subplot(grid[0, 1])
+        _draw_layers(ax2, model)
+    else:
+        ax3 = fig.add_subplot(1, 1, 1, projection="3d")
+    _draw_3d(ax3, record, model, mesh, plan, fig, layered)
+    if title is None:
+        faces = len(model.polyhedron.faces) if model.polyhedron is not None else 0
+        title = f"{record.object or 'object'}: {record.touches} touches, {faces} faces"
+        if plan is not None:
+            title += (
+                f"\ngrasp {plan.best.width * 1000:.0f} mm, ε = {plan.best.quality:.3f}"
+                if plan.best is not None
+                else f"\nno grasp: {plan.reason}"
+            )
+    fig.suptitle(_wrap(title, size[0]), fontsize=8)
+    if path is not None:
+        save_figure(fig, path)
+    return fig
+
+
+def _wrap(text: str, width_in: float) -> str:
+    """Wrap each line of a title to the figure's width (about 15 characters per inch at 8 pt)."""
+    chars = max(int(width_in * 15), 20)
+    return "\n".join(textwrap.fill(line, chars) for line in text.splitlines())
+
+
+def plot_classification(
+    result: Any,
+    path: str | Path | None = None,
+    *,
+    mesh: trimesh.Trimesh | None = None,
+    grasp: GraspPlan | bool | None = True,
+    size: tuple[float, float] = DEFAULT_SIZE,
+    dpi: float = DEFAULT_DPI,
+) -> Figure:
+    """Draw a :class:`tactile_kb.pipeline.Classification`: its model, grasp and answer.
+
+    ``result`` needs ``.model`` (an ObjectModel), ``.decision`` (with ``.answer`` and
+    ``.bits``) and ``.object``.
+    """
+    model = getattr(result, "model", None)
+    decision = getattr(result, "decision", None)
+    if not isinstance(model, ObjectModel) or decision is None:
+        raise UsageError("plot_classification needs a classification result (model, decision)")
+    title = f"{getattr(result, 'object', '') or model.record.object}: {decision.answer}"
+    title += f"  [{decision.bits}]"
+    fig = plot_exploration(model, None, mesh=mesh, grasp=grasp, title=title, size=size, dpi=dpi)
+    if path is not None:
+        save_figure(fig, path)
+    return fig
+
+
+# ---------------------------------------------------------------------------------------------
+# The choice tree
+# ---------------------------------------------------------------------------------------------
+
+
+@dataclass
+class TreeNode:
+    """A node of the choice tree: the values decided so far and what follows.
+
+    ``values`` are the values of the phase that led here (empty at the root); a leaf has a
+    ``label`` (a class id, or the rule set's otherwise id) and ``answer``.
+    """
+
+    phase: int
+    values: tuple[tuple[str, bool], ...] = ()
+    children: list[TreeNode] = field(default_factory=list)
+    label: str | None = None
+    answer: str = ""
+    count: int = 0
+    y: float = 0.0
+
+    @property
+    def leaves(self) -> int:
+        """Number of leaves below (1 for a leaf)."""
+        return 1 if not self.children else sum(c.leaves for c in self.children)
+
+
+def _labels(kb: KnowledgeBase) -> tuple[list[str], list[str]]:
+    ids = [c.id for c in kb.classes] + [kb.rules.otherwise_id]
+    answers = [c.answer for c in kb.classes] + [kb.rules.otherwise_answer]
+    return ids, answers
+
+
+def choice_tree(kb: KnowledgeBase) -> TreeNode | None:
+    """The lazy choice tree of ``kb``: phase by phase, branching on the values consistent with
+    r(L), stopping as soon as one class remains. None when r(L) is too large to enumerate."""
+    if kb.r_count > TREE_MINTERM_LIMIT:
+        return None
+    terms = list(kb.minterms())
+    ids, answers = _labels(kb)
+    root = TreeNode(phase=-1, count=len(terms))
+    if not terms:
+        return root
+    arr = np.array([[ch == "1" for ch in t] for t in terms], dtype=bool)
+    cls = kb.classify_batch(arr)
+    order = {name: i for i, name in enumerate(kb.ids)}
+    phases = [[order[p] for p in ph.propositions] for ph in kb.rules.phases]
+
+    def grow(node: TreeNode, rows: np.ndarray[Any, np.dtype[np.intp]], depth: int) -> None:
+        labels = set(cls[rows].tolist())
+        if len(labels) == 1 or depth >= len(phases):
+            k = int(cls[rows[0]])
+            node.label = ids[k] if 0 <= k < len(ids) else "inconsistent"
+            node.answer = answers[k] if 0 <= k < len(answers) else ""
+            if len(labels) > 1:
+                node.label, node.answer = "mixed", "MORE THAN ONE ANSWER"
+            return
+        cols = phases[depth]
+        if not _matters(arr[rows], cls[rows], cols):
+            # the answer does not depend on this phase here: pass through without branching
+            child = TreeNode(phase=depth, values=(), count=len(rows))
+            node.children.append(child)
+            grow(child, rows, depth + 1)
+            return
+        keys = {tuple(bool(v) for v in arr[r, cols]) for r in rows}
+        for key in sorted(keys, reverse=True):
+            sel = rows[np.all(arr[rows][:, cols] == np.asarray(key, dtype=bool), axis=1)]
+            child = TreeNode(
+                phase=depth,
+                values=tuple((kb.ids[c], v) for c, v in zip(cols, key, strict=True)),
+                count=len(sel),
+            )
+            node.children.append(child)
+            grow(child, sel, depth + 1)
+
+    grow(root, np.arange(len(terms)), 0)
+    return root
+
+
+def _matters(
+    rows: np.ndarray[Any, np.dtype[np.bool_]],
+    labels: np.ndarray[Any, np.dtype[Any]],
+    cols: Sequence[int],
+) -> bool:
+    """Whether branching on the columns ``cols`` tells anything among these minterms.
+
+    It does not when every value of the phase leaves the same completions (the other
+    columns) and the answer is a function of those completions alone.
+    """
+    drop = set(cols)
+    keep = [c for c in range(rows.shape[1]) if c not in drop]
+    seen: dict[bytes, int] = {}
+    groups: dict[bytes, set[bytes]] = {}
+    for full, rest, label in zip(rows[:, list(cols)], rows[:, keep], labels.tolist(), strict=True):
+        key = np.packbits(rest).tobytes()
+        if seen.setdefault(key, label) != label:
+            return True
+        groups.setdefault(np.packbits(full).tobytes(), set()).add(key)
+    completions = list(groups.values())
+    return any(c != completions[0] for c in completions[1:])
+
+
+def _mathtext(values: Sequence[tuple[str, bool]]) -> str:
+    parts = [(rf"\bar{{{n}}}" if not v else n).replace("_", r"\_") for n, v in values]
+    return "$" + r"\cdot ".join(parts) + "$" if parts else ""
+
+
+def _on_path(node: TreeNode, values: Mapping[str, bool | None]) -> bool:
+    return all(values.get(n) is v for n, v in node.values)
+
+
+def plot_tree(
+    rules: RuleSet | KnowledgeBase | str | Path,
+    path: str | Path | None = None,
+    *,
+    decision: Decision | None = None,
+    assignment: Mapping[str, bool] | str | None = None,
+    size: tuple[float, float] = (9.6, 6.4),
+    dpi: float = DEFAULT_DPI,
+) -> Figure:
+    """Draw the choice tree of a rule file, with the path of a decision highlighted.
+
+    Parameters
+    ----------
+    rules
+        A packaged rule set name, a YAML file, a RuleSet or a compiled KnowledgeBase.
+    path
+        Write the figure there when given.
+    decision
+        Highlight the branches this decision took and its class.
+    assignment
+        Or: truth values (a mapping, or a bit string like ``"101101111"``) to classify and
+        highlight.
+    size, dpi
+        Figure size (inches) and resolution.
+    """
+    from tactile_kb.compiler import KnowledgeBase, compile_rules
+
+    kb = rules if isinstance(rules, KnowledgeBase) else compile_rules(rules)
+    if decision is None and assignment is not None:
+        decision = kb.classify(assignment)
+    values: dict[str, bool | None] = dict(decision.values) if decision is not None else {}
+    fig = _figure(size, dpi)
+    ax = fig.add_axes((0.01, 0.01, 0.98, 0.9))
+    ax.set_axis_off()
+    phases = kb.rules.phases
+    ncol = len(phases) + 1
+    root = choice_tree(kb)
+    if root is not None and root.leaves > TREE_LEAF_LIMIT:
+        root = None
+    xs = np.linspace(0.03, _TREE_RIGHT, ncol)
+    # phase headers: the paper's "classification carried out in phases"
+    column_pt = (xs[1] - xs[0]) * 0.98 * size[0] * 72.0
+    head_font = float(np.clip(column_pt / 8.0, 4.5, 7.0))
+    chars = max(int(column_pt / (0.55 * head_font)), 4)
+    for k, ph in enumerate(phases):
+        props = ", ".join(ph.propositions)
+        head = textwrap.fill(f"{ph.id} {ph.title}".strip(), chars)
+        ax.text(
+            (xs[k] + xs[k + 1]) / 2,
+            1.0,
+            f"{head}\n{textwrap.fill(props, chars)}",
+            ha="center",
+            va="top",
+            fontsize=head_font,
+            color="0.25",
+        )
+    ax.text(_TREE_LEAF + 0.01, 1.0, "answer", ha="left", va="top", fontsize=7, color="0.25")
+    ax.set_xlim(0, 1)
+    ax.set_ylim(-0.02, 1.02)
+    title = f"choice tree of {kb.rules.name}"
+    if decision is not None:
+        title += f": {decision.answer}"
+    fig.suptitle(title, fontsize=9)
+    if root is None:
+        _phase_summary(ax, kb, xs, values)
+    else:
+        _draw_tree(ax, kb, root, xs, values, decision, size)
+    if path is not None:
+        save_figure(fig, path)
+    return fig
+
+
+def _draw_tree(
+    ax: Any,
+    kb: KnowledgeBase,
+    root: TreeNode,
+    xs: np.ndarray[Any, np.dtype[np.float64]],
+    values: Mapping[str, bool | None],
+    decision: Decision | None,
+    size: tuple[float, float],
+) -> None:
+    n_leaves = max(root.leaves, 1)
+    top, bottom = 0.86, 0.02
+    step = (top - bottom) / max(n_leaves - 1, 1) if n_leaves > 1 else 0.0
+    counter = [0]
+    # leaves: two lines of _LEAF_CHARS characters in the right-hand column
+    width_pt = (1.0 - _TREE_LEAF - 0.01) * 0.98 * size[0] * 72.0
+    height_pt = (top - bottom) * 0.9 * size[1] * 72.0 / n_leaves
+    font = float(np.clip(min(width_pt / (0.6 * _LEAF_CHARS), height_pt / 2.8), 3.5, 8.0))
+
+    def place(node: TreeNode) -> float:
+        if not node.children:
+            node.y = top - counter[0] * step if n_leaves > 1 else (top + bottom) / 2
+            counter[0] += 1
+        else:
+            ys = [place(c) for c in node.children]
+            node.y = float(np.mean(ys))
+        return node.y
+
+    place(root)
+    x_leaf = _TREE_LEAF
+
+    def draw(node: TreeNode, hot: bool) -> None:
+        x = xs[node.phase + 1]
+        for child in node.children:
+            child_hot = hot and decision is not None and _on_path(child, values)
+            end_x = xs[child.phase + 1] if child.children else x_leaf
+            colour = _HIGHLIGHT if child_hot else "0.55"
+            width = 2.2 if child_hot else 0.7
+            ax.plot([x, x, end_x], [node.y, child.y, child.y], color=colour, lw=width, zorder=1)
+            ax.text(
+                (x + xs[child.phase + 1]) / 2 if child.children else (x + end_x) / 2,
+                child.y + 0.004,
+                _mathtext(child.values),
+                ha="center",
+                va="bottom",
+                fontsize=font,
+                color=colour,
+            )
+            draw(child, child_hot)
+        if not node.children:
+            label_hot = hot and decision is not None and node.label == decision.label
+            ax.text(
+                x_leaf + 0.01,
+                node.y,
+                textwrap.fill(node.answer, _LEAF_CHARS),
+                ha="left",
+                va="center",
+                fontsize=font,
+                color="k",
+                bbox={
+                    "boxstyle": "round,pad=0.25",
+                    "fc": "#fde2cf" if label_hot else "#eef2f8",
+                    "ec": _HIGHLIGHT if label_hot else "0.6",
+                    "lw": 1.6 if label_hot else 0.5,
+                },
+                zorder=3,
+            )
+        ax.plot([x], [node.y], "o", ms=3, color="0.3", zorder=2)
+
+    draw(root, True)
+
+
+def _phase_summary(
+    ax: Any,
+    kb: KnowledgeBase,
+    xs: np.ndarray[Any, np.dtype[np.float64]],
+    values: Mapping[str, bool | None],
+) -> None:
+    """When r(L) is too large for a tree: each phase's propositions with their values."""
+    for k, ph in enumerate(kb.rules.phases):
+        lines = []
+        for pid in ph.propositions:
+            v = values.get(pid)
+            mark = {True: "1", False: "0", None: "·"}[v]
+            lines.append(f"{pid} = {mark}")
+        box = FancyBboxPatch(
+            (xs[k] + 0.005, 0.35), xs[k + 1] - xs[k] - 0.01, 0.45, boxstyle="round,pad=0.005"
+        )
+        box.set(fc="#eef2f8", ec="0.6", lw=0.5)
+        ax.add_patch(box)
+        ax.text((xs[k] + xs[k + 1]) / 2, 0.78, "\n".join(lines), ha="center", va="top", fontsize=6)
+    classes = [c.answer for c in kb.classes] + [kb.rules.otherwise_answer]
+    ax.text(_TREE_LEAF + 0.01, 0.8, "\n".join(classes), ha="left", va="top", fontsize=5)

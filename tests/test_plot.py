@@ -1,0 +1,169 @@
+"""Pictures: headless, non-empty, of the requested size; the choice tree against r(L)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+from matplotlib.colors import to_hex
+from PIL import Image
+
+from tactile_kb.compiler import compile_rules
+from tactile_kb.errors import UsageError
+from tactile_kb.explorers import get_explorer
+from tactile_kb.finger import builtin_finger
+from tactile_kb.grasp import plan_grasp
+from tactile_kb.model import build_model
+from tactile_kb.plot import (
+    TreeNode,
+    choice_tree,
+    plot_classification,
+    plot_exploration,
+    plot_tree,
+    save_figure,
+)
+from tactile_kb.record import ExplorationRecord
+from tactile_kb.solids import box, l_shape
+from tactile_kb.synthetic import sample_record
+
+
+def _png(path: Path) -> np.ndarray:
+    with Image.open(path) as im:
+        return np.asarray(im.convert("RGB"))
+
+
+def _drawn(path: Path, size: tuple[int, int]) -> None:
+    pixels = _png(path)
+    assert pixels.shape[:2] == (size[1], size[0])
+    assert pixels.std() > 5  # not a blank canvas
+    assert (pixels < 250).any(axis=2).mean() > 0.01  # something is drawn
+
+
+@pytest.fixture(scope="module")
+def box_record() -> ExplorationRecord:
+    return sample_record(box(0.1, 0.06, 0.04), builtin_finger("33"), seed=1, name="box")
+
+
+@pytest.mark.parametrize(("w", "h", "dpi"), [(6.4, 4.8, 100), (4.0, 3.0, 80), (3.0, 5.0, 50)])
+def test_exploration_png_has_the_requested_size(
+    tmp_path: Path, box_record: ExplorationRecord, w: float, h: float, dpi: int
+) -> None:
+    out = tmp_path / "box.png"
+    mesh = box(0.1, 0.06, 0.04)
+    plot_exploration(box_record, out, mesh=mesh, grasp=True, size=(w, h), dpi=dpi)
+    _drawn(out, (round(w * dpi), round(h * dpi)))
+
+
+def test_svg_and_pdf_by_extension(tmp_path: Path, box_record: ExplorationRecord) -> None:
+    model = build_model(box_record)
+    plot_exploration(model, tmp_path / "box.svg", grasp=plan_grasp(model))
+    text = (tmp_path / "box.svg").read_text()
+    assert "<svg" in text
+    assert len(text) > 10_000
+    plot_exploration(model, tmp_path / "box.pdf")
+    assert (tmp_path / "box.pdf").read_bytes().startswith(b"%PDF")
+
+
+def test_bad_picture_paths(tmp_path: Path, box_record: ExplorationRecord) -> None:
+    with pytest.raises(UsageError, match="suffix"):
+        plot_exploration(box_record, tmp_path / "box.gif")
+    with pytest.raises(UsageError, match="does not exist"):
+        plot_exploration(box_record, tmp_path / "missing" / "box.png")
+    with pytest.raises(UsageError):
+        plot_exploration("not a record")  # type: ignore[arg-type]
+    fig = plot_exploration(box_record)
+    with pytest.raises(UsageError):
+        save_figure(fig, tmp_path / "box.jpeg")
+
+
+def test_figures_do_not_touch_pyplot_state(box_record: ExplorationRecord) -> None:
+    import matplotlib.pyplot as plt
+
+    before = plt.get_fignums()
+    plot_exploration(box_record)
+    plot_tree("parallelepipeds")
+    assert plt.get_fignums() == before
+
+
+def test_layers_panel_for_box_unions(tmp_path: Path) -> None:
+    mesh = l_shape(0.12, 0.08, 0.04, 0.04)
+    record = get_explorer("stepper").explore(mesh, finger="4", seed=0)
+    fig = plot_exploration(record, tmp_path / "l.png", mesh=mesh, size=(6.0, 3.0), dpi=60)
+    assert len([ax for ax in fig.axes if ax.name != "3d"]) >= 1  # the contour panel
+    contour_ax = next(ax for ax in fig.axes if ax.get_title() == "layer contours")
+    legend = contour_ax.get_legend()
+    assert legend is not None
+    assert any("6 corners" in t.get_text() for t in legend.get_texts())
+    _drawn(tmp_path / "l.png", (360, 180))
+
+
+class _Result:
+    def __init__(self, model: object, decision: object) -> None:
+        self.model, self.decision, self.object = model, decision, "box"
+
+
+def test_plot_classification(tmp_path: Path, box_record: ExplorationRecord) -> None:
+    kb = compile_rules("parallelepipeds")
+    result = _Result(build_model(box_record), kb.classify("101101011"))
+    fig = plot_classification(result, tmp_path / "c.png", dpi=50)
+    assert "RECTANGULAR PARALLELEPIPED" in fig.texts[0].get_text()
+    _drawn(tmp_path / "c.png", (320, 240))
+    with pytest.raises(UsageError):
+        plot_classification(object())
+
+
+def _walk(node: TreeNode, values: dict[str, bool]) -> TreeNode:
+    while node.children:
+        node = next(c for c in node.children if all(values[n] is v for n, v in c.values))
+    return node
+
+
+def test_choice_tree_agrees_with_the_engine_on_every_member_of_r_of_l() -> None:
+    kb = compile_rules("parallelepipeds")
+    root = choice_tree(kb)
+    assert root is not None
+    assert root.count == kb.r_count
+    for term in kb.minterms():
+        values = {name: ch == "1" for name, ch in zip(kb.ids, term, strict=True)}
+        leaf = _walk(root, values)
+        assert leaf.label == kb.classify(term).label
+    # the tree starts with the paper's phase I: contact or not
+    assert {c.values for c in root.children} == {(("A", True),), (("A", False),)}
+
+
+def test_tree_picture_with_the_decision_path(tmp_path: Path) -> None:
+    out = tmp_path / "tree.png"
+    fig = plot_tree("parallelepipeds", out, assignment="101101111", size=(8.0, 5.0), dpi=60)
+    assert "OBJECT IS A CUBE" in fig.texts[0].get_text()
+    _drawn(out, (480, 300))
+    hot = {
+        t.get_text()
+        for ax in fig.axes
+        for t in ax.texts
+        if (patch := t.get_bbox_patch()) is not None and to_hex(patch.get_edgecolor()) == "#e66100"
+    }
+    assert hot == {"OBJECT IS A CUBE"}
+
+
+def test_gallery_page_shows_every_picture_and_they_are_small() -> None:
+    from tactile_kb.gallery import gallery_items
+
+    docs = Path(__file__).resolve().parents[1] / "docs"
+    page = (docs / "gallery.md").read_text(encoding="utf-8")
+    items = gallery_items()
+    assert len(items) == 16  # twelve Fig. 5 objects, three box unions, the tree
+    for item in items:
+        assert f"(gallery/{item.file})" in page
+        image = docs / "gallery" / item.file
+        assert image.is_file(), image
+        assert image.stat().st_size <= 100_000
+
+
+def test_gallery_command_writes_every_picture(tmp_path: Path) -> None:
+    from tactile_kb.gallery import gallery_items, main
+
+    assert main([str(tmp_path)]) == 0
+    for item in gallery_items():
+        pixels = _png(tmp_path / item.file)
+        assert pixels.std() > 5
