@@ -46,8 +46,10 @@ _EXPORTS: dict[str, str] = {
     "load_rules": "tactile_kb.rules",
     "parse_rules": "tactile_kb.rules",
     "parse_expr": "tactile_kb.expr",
+    "CompiledClass": "tactile_kb.compiler",
     "KnowledgeBase": "tactile_kb.compiler",
     "compile_rules": "tactile_kb.compiler",
+    "Economy": "tactile_kb.economy",
     "Decision": "tactile_kb.engine",
     # touch: finger, worlds, explorers, records
     "Finger": "tactile_kb.finger",
@@ -86,8 +88,10 @@ _EXPORTS: dict[str, str] = {
 
 __all__ = [
     "Classification",
+    "CompiledClass",
     "Contact",
     "Decision",
+    "Economy",
     "ExplorationError",
     "ExplorationRecord",
     "Explorer",
@@ -140,7 +144,8 @@ __all__ = [
 ]
 
 if TYPE_CHECKING:
-    from tactile_kb.compiler import KnowledgeBase, compile_rules
+    from tactile_kb.compiler import CompiledClass, KnowledgeBase, compile_rules
+    from tactile_kb.economy import Economy
     from tactile_kb.engine import Decision
     from tactile_kb.errors import (
         ExplorationError,
