@@ -597,6 +597,10 @@ def compile_rules(rules: RuleSet | str | Path, *, check: bool = True) -> Knowled
         if any(p.severity == "error" for p in problems):
             raise RuleFileError(problems, _excerpt(rules, problems))
         kb.problems = tuple(sorted(problems, key=lambda p: (p.line, p.column)))
+    from tactile_kb.engine import FAST_MAX_N
+
+    if kb.n <= FAST_MAX_N:
+        _ = kb.engine  # small bases: precompute the answer sets, so classify() is fast at once
     return kb
 
 

@@ -46,7 +46,15 @@ from tactile_kb.notation import Cube, cube_text
 if TYPE_CHECKING:
     from tactile_kb.compiler import KnowledgeBase, Node
 
-__all__ = ["INCONSISTENT", "TABLE_MAX_N", "UNDECIDED", "Decision", "Engine"]
+__all__ = [
+    "FAST_MAX_N",
+    "INCONSISTENT",
+    "TABLE_MAX_N",
+    "UNDECIDED",
+    "Decision",
+    "Engine",
+    "ternary_closure",
+]
 
 INCONSISTENT = "inconsistent"
 """The label of an assignment that breaks a connection (batch index -1)."""
@@ -54,7 +62,15 @@ UNDECIDED = "undecided"
 """The label of a partial assignment that leaves more than one answer possible."""
 TABLE_MAX_N = 22
 """Batch classification uses a lookup table of 2ⁿ answers up to this many propositions."""
+FAST_MAX_N = 10
+"""Up to this many propositions (and 61 classes) the engine precomputes, for each of the 3ⁿ
+partial assignments, the set of answers its completions get: a single classification then
+needs no BDD operation."""
 CACHE_SIZE = 1 << 16
+_TERNARY = str.maketrans("-", "2")
+_KNOWN = str.maketrans("01-", "110")
+_VALUE: dict[str, bool | None] = {"0": False, "1": True, "-": None}
+_BIT_CHARS = frozenset("01-")
 
 IntArray = np.ndarray[Any, np.dtype[np.int16]]
 
@@ -110,6 +126,27 @@ class _Term:
     cube: Cube
 
 
+def ternary_closure(values: np.ndarray[Any, Any], n: int, op: Any) -> np.ndarray[Any, Any]:
+    """Extend a table over the 2ⁿ full assignments to the 3ⁿ partial ones.
+
+    ``values[r]`` belongs to the assignment whose bits are those of r (first proposition most
+    significant). The result is indexed by the base-3 number of the pattern (digit 0, 1, or
+    2 for unknown: ``int(bits.replace("-", "2"), 3)``) and holds ``op`` (a numpy ufunc such
+    as ``np.bitwise_or`` or ``np.add``) reduced over the pattern's completions.
+
+    Examples
+    --------
+    >>> t = ternary_closure(np.array([1, 2, 4, 8]), 2, np.add)
+    >>> [int(t[int(p, 3)]) for p in ("00", "01", "02", "12", "22")]
+    [1, 2, 3, 12, 15]
+    """
+    a = values.reshape((2,) * n)
+    for axis in range(n):
+        both = op(a.take([0], axis=axis), a.take([1], axis=axis))
+        a = np.concatenate([a, both], axis=axis)
+    return a.reshape(-1)
+
+
 def _numpy_eval(expr: Expr, cols: Mapping[str, Any], size: int) -> Any:
     return fold(
         expr,
@@ -155,6 +192,34 @@ class Engine:
         ]
         self._table: IntArray | None = None
         self._wide: dict[int, IntArray] = {}
+        index = kb.index
+        self._powers = [3 ** (self.n - 1 - i) for i in range(self.n)]
+        self._all_unknown = sum(2 * p for p in self._powers)
+        self._phase_positions = [
+            (ph.id, [index[name] for name in ph.propositions]) for ph in rules.phases
+        ]
+        self._answer_sets: list[int] | None = None
+        self._satisfiable: list[bytes] = []  # per connection, by partial assignment
+        if self.n <= FAST_MAX_N and self.K + 1 <= 62:
+            self._build_fast()
+
+    def _build_fast(self) -> None:
+        """The answer set (a bit mask, bit K = otherwise) of every partial assignment, and
+        whether each connection can still hold."""
+        size = 1 << self.n
+        cols = self._columns()
+        table = self.table()
+        bit = np.left_shift(np.int64(1), np.maximum(table, 0).astype(np.int64))
+        masks = np.where(table >= 0, bit, 0).astype(np.int64)
+        self._answer_sets = ternary_closure(masks, self.n, np.bitwise_or).tolist()
+        self._satisfiable = [
+            ternary_closure(
+                np.broadcast_to(_numpy_eval(c.expr, cols, size), (size,)).astype(np.uint8),
+                self.n,
+                np.bitwise_or,
+            ).tobytes()
+            for c in self.kb.rules.connections
+        ]
 
     def _mask(self, cube: Cube) -> tuple[int, int]:
         mask = value = 0
@@ -176,8 +241,8 @@ class Engine:
                     f"bit string {assignment!r} has {len(assignment)} characters; "
                     f"the rule set has {n} propositions ({' '.join(ids)})"
                 )
-            bad = next((ch for ch in assignment if ch not in "01-"), None)
-            if bad is not None:
+            if not _BIT_CHARS.issuperset(assignment):
+                bad = next(ch for ch in assignment if ch not in _BIT_CHARS)
                 raise UsageError(f"bit string {assignment!r}: {bad!r} is not 0, 1 or - (unknown)")
             return assignment
         if isinstance(assignment, np.ndarray):
@@ -209,15 +274,34 @@ class Engine:
         )
 
     def _values(self, bits: str) -> dict[str, bool | None]:
-        return {
-            name: None if ch == "-" else ch == "1" for name, ch in zip(self.ids, bits, strict=True)
-        }
+        return dict(zip(self.ids, map(_VALUE.__getitem__, bits), strict=True))
 
-    # ----------------------------------------------------------------- BDD questions
+    # ----------------------------------------------------------------- answer sets
+
+    def _pattern(self, known: Mapping[str, bool]) -> int:
+        """The base-3 index of a partial assignment (``-`` is digit 2)."""
+        t: int = self._all_unknown
+        index: dict[str, int] = self.kb.index
+        powers = self._powers
+        for name, v in known.items():
+            p = powers[index[name]]
+            t -= p if v else 2 * p
+        return t
+
+    @staticmethod
+    def _members(mask: int) -> list[int]:
+        out = []
+        while mask:
+            low = mask & -mask
+            out.append(low.bit_length() - 1)
+            mask ^= low
+        return out
 
     def possible(self, known: Mapping[str, bool]) -> list[int]:
         """Answers (class indices, ``K`` = otherwise) some completion of ``known`` gets;
         empty if ``known`` breaks the connections."""
+        if self._answer_sets is not None:
+            return self._members(self._answer_sets[self._pattern(known)])
         bdd, kb = self.kb.bdd, self.kb
         defs = dict(known)
         if not defs:
@@ -230,6 +314,8 @@ class Engine:
 
     def forced(self, known: Mapping[str, bool], name: str) -> bool | None:
         """The value the connections force on ``name`` given ``known``, if any."""
+        if self._answer_sets is not None and name not in known:
+            return self._forced_at(self._pattern(known), self.kb.index[name])
         bdd = self.kb.bdd
         rest: Node = bdd.let(dict(known), self.kb.r) if known else self.kb.r
         x = bdd.var(name)
@@ -238,6 +324,35 @@ class Engine:
         if rest & ~x == bdd.false:
             return True
         return None
+
+    def _forced_at(self, t: int, i: int) -> bool | None:
+        """:meth:`forced` for the pattern of base-3 index ``t``, proposition ``i`` unknown."""
+        assert self._answer_sets is not None
+        p = self._powers[i]
+        if self._answer_sets[t - p] == 0:  # no completion with the proposition true
+            return False
+        if self._answer_sets[t - 2 * p] == 0:
+            return True
+        return None
+
+    def _certain_phase_fast(self, bits: str, label: int) -> str | None:
+        """:meth:`_certain_phase` on the answer sets: no BDD operation."""
+        assert self._answer_sets is not None
+        sets, powers = self._answer_sets, self._powers
+        want = 1 << label
+        t = self._all_unknown
+        if sets[t] == want:
+            return None
+        for phase, positions in self._phase_positions:
+            for i in positions:
+                ch = bits[i]
+                if ch == "1":
+                    t -= powers[i]
+                elif ch == "0":
+                    t -= 2 * powers[i]
+            if sets[t] == want:
+                return phase
+        return None  # pragma: no cover - the full assignment decides
 
     def _certain_phase(self, values: Mapping[str, bool | None], label: int) -> str | None:
         known: dict[str, bool] = {}
@@ -302,17 +417,30 @@ class Engine:
         self, bits: str, evaluated: tuple[str, ...] | None = None, asked_phase: str | None = None
     ) -> Decision:
         values = self._values(bits)
-        known = {k: v for k, v in values.items() if v is not None}
         lazily = evaluated is not None
+        full = "-" not in bits
         if evaluated is None:
-            evaluated = tuple(name for name in self.ids if values[name] is not None)
-        x = int(bits.replace("-", "0"), 2) if self.n else 0
-        known_mask = int("".join("0" if ch == "-" else "1" for ch in bits), 2) if self.n else 0
-        answers = self.possible(known)
+            evaluated = self.ids if full else tuple(v for v in self.ids if values[v] is not None)
+        n = self.n
+        x = int(bits.replace("-", "0"), 2) if n else 0
+        known_mask = int(bits.translate(_KNOWN), 2) if n else 0
+        sets = self._answer_sets
+        known: dict[str, bool] = {}
+        t = 0
+        if sets is not None:  # no BDD operation on this path
+            t = int(bits.translate(_TERNARY), 3) if n else 0
+            answers = self._members(sets[t])
+        else:
+            known = {k: v for k, v in values.items() if v is not None}
+            answers = self.possible(known)
         rules = self.kb.rules
         common = {"bits": bits, "values": values, "evaluated": evaluated}
         if not answers:
-            broken = self._violations(values)
+            broken = []
+            if sets is not None:
+                broken = [i for i, sat in enumerate(self._satisfiable) if not sat[t]]
+            if not broken:
+                broken = self._violations(values)
             cited = tuple(
                 f"line {rules.connections[i].line}: {rules.connections[i].text}" for i in broken
             )
@@ -334,8 +462,15 @@ class Engine:
             )
         if len(answers) > 1:
             names_ = [self.labels[i] for i in answers]
+            index = self.kb.index
             nxt = next(
-                (v for v in self.order if values[v] is None and self.forced(known, v) is None),
+                (
+                    v
+                    for v in self.order
+                    if values[v] is None
+                    and (self.forced(known, v) if sets is None else self._forced_at(t, index[v]))
+                    is None
+                ),
                 None,
             )
             ask = f"; evaluate {nxt} next" if nxt else ""
@@ -349,7 +484,12 @@ class Engine:
                 **common,  # type: ignore[arg-type]
             )
         label = answers[0]
-        phase = asked_phase if lazily else self._certain_phase(values, label)
+        if lazily:
+            phase = asked_phase
+        elif sets is not None:
+            phase = self._certain_phase_fast(bits, label)
+        else:
+            phase = self._certain_phase(values, label)
         after = f", certain after phase {phase}" if phase else ", certain before any evaluation"
         if label < self.K:
             k = self.kb.classes[label]
@@ -399,14 +539,15 @@ class Engine:
         if self._table is None:
             if self.n > TABLE_MAX_N:
                 raise UsageError(f"no lookup table above {TABLE_MAX_N} propositions")
-            size = 1 << self.n
-            ints = np.arange(size, dtype=np.uint32)
-            cols = {
-                name: ((ints >> (self.n - 1 - i)) & 1).astype(bool)
-                for i, name in enumerate(self.ids)
-            }
-            self._table = self._evaluate(cols, size)
+            self._table = self._evaluate(self._columns(), 1 << self.n)
         return self._table
+
+    def _columns(self) -> dict[str, np.ndarray[Any, Any]]:
+        """Each proposition's column over the 2ⁿ assignments (row r = the bits of r)."""
+        ints = np.arange(1 << self.n, dtype=np.uint32)
+        return {
+            name: ((ints >> (self.n - 1 - i)) & 1).astype(bool) for i, name in enumerate(self.ids)
+        }
 
     def _evaluate(self, cols: Mapping[str, Any], size: int) -> IntArray:
         rules = self.kb.rules

@@ -90,7 +90,7 @@ def test_bdd_counts_and_class_terms_match_truth_tables(text: str) -> None:
     n = kb.n
     assert kb.r_count == int(ok.sum())
     if n <= 12:
-        assert list(kb.minterms()) == [bits(r, n) for r in np.flatnonzero(ok)]
+        assert list(kb.minterms()) == [bits(int(r), n) for r in np.flatnonzero(ok)]
     for k in kb.classes:
         truth = table(k.text, rules.ids) & ok
         assert k.count == int(truth.sum())
