@@ -38,7 +38,13 @@ from tactile_kb.objects import ObjectLike, object_name
 from tactile_kb.record import ExplorationRecord
 from tactile_kb.rules import RuleSet, load_rules
 
-__all__ = ["Classification", "classify", "classify_record", "knowledge_base"]
+__all__ = [
+    "Classification",
+    "binding_problems",
+    "classify",
+    "classify_record",
+    "knowledge_base",
+]
 
 RulesLike = str | Path | RuleSet | KnowledgeBase
 
@@ -101,33 +107,33 @@ def knowledge_base(rules: RulesLike) -> KnowledgeBase:
     return kb
 
 
-def _check_bindings(rules: RuleSet) -> None:
+def binding_problems(rules: RuleSet) -> list[Problem]:
+    """Every proposition of ``rules`` whose feature binding is missing or wrong, located.
+
+    A rule file binds each proposition to a feature extractor by name with parameters; the
+    names are checked here against the feature registry (built-ins and plugins) and the
+    parameters against the extractor's signature.
+    """
     problems = []
-    for prop in rules.propositions:
+    for i, prop in enumerate(rules.propositions):
         if prop.feature is None:
             problems.append(
-                Problem(
-                    rules.file,
-                    prop.line,
-                    1,
-                    f"propositions.{prop.id}",
-                    "no feature decides this proposition (add feature: NAME)",
+                rules.problem(
+                    ("propositions", i),
+                    f"no feature decides proposition {prop.id!r} (add feature: NAME)",
                 )
             )
             continue
         message = check_binding(prop.feature.name, prop.feature.params)
         if message:
-            problems.append(
-                Problem(
-                    rules.file,
-                    prop.feature.line,
-                    prop.feature.column,
-                    f"propositions.{prop.id}.feature",
-                    message,
-                )
-            )
+            problems.append(rules.problem(("propositions", i, "feature"), message))
+    return problems
+
+
+def _check_bindings(rules: RuleSet) -> None:
+    problems = binding_problems(rules)
     if problems:
-        raise RuleFileError(problems)
+        raise RuleFileError(problems, rules.source.excerpt(problems[0].line, problems[0].column))
 
 
 class _Evidence:

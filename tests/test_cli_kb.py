@@ -125,3 +125,42 @@ def test_query_usage_errors_exit_2_with_one_line(
 def test_unknown_rule_set_is_a_usage_error(capsys: pytest.CaptureFixture[str]) -> None:
     assert main(["compile", "no-such-rules"]) == 2
     assert "no rule file 'no-such-rules'" in capsys.readouterr().err
+
+
+def test_validate_checks_feature_bindings_with_the_logic(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    text = (
+        "name: b\n"
+        "propositions:\n"
+        "  - id: A\n"
+        "    text: contact\n"
+        "    feature: contact\n"
+        "  - id: B\n"
+        "    text: six faces\n"
+        "    feature: {name: face_count, params: {sides: 6}}\n"
+        "  - id: C\n"
+        "    text: unbound\n"
+        "connections:\n"
+        "  - A & ~A\n"
+        "phases:\n"
+        "  - id: I\n"
+        "    propositions: [A, B, C]\n"
+        "classes:\n"
+        "  - id: x\n"
+        "    answer: X\n"
+        "    when: A\n"
+        "otherwise:\n"
+        "  id: none\n"
+        "  answer: NONE\n"
+    )
+    path = tmp_path / "b.yaml"
+    path.write_text(text)
+    assert main(["validate", str(path)]) == 1
+    err = capsys.readouterr().err.splitlines()
+    assert (
+        err[0]
+        == f"{path}:8:14: propositions[1].feature: feature 'face_count' has no parameter 'sides' (parameters: equals, max, min)"
+    )
+    assert err[1].startswith(f"{path}:9:5: propositions[2]: no feature decides proposition 'C'")
+    assert any(line.startswith(f"{path}:12:5: connections[0]") for line in err[2:])

@@ -59,12 +59,7 @@ def run_validate(args: argparse.Namespace) -> int:
     for arg in args.files:
         problems: list[Problem]
         try:
-            kb = compile_rules(_load(arg))
-            problems = list(kb.problems)
-            summary = (
-                f"{kb.rules.file}: ok: {kb.n} propositions, {len(kb.classes)} classes, "
-                f"|r(L)| = {kb.r_count}"
-            )
+            rules = _load(arg)
         except RuleFileError as exc:
             problems = list(exc.problems)
             summary = ""
@@ -72,6 +67,23 @@ def run_validate(args: argparse.Namespace) -> int:
             print(f"tactile-kb: error: {exc}", file=sys.stderr)
             failed = True
             continue
+        else:
+            # Feature bindings (against the registry, plugins included) and the logic are
+            # checked together, so that every problem is listed at once.
+            from tactile_kb.pipeline import binding_problems
+
+            problems = binding_problems(rules)
+            try:
+                kb = compile_rules(rules)
+                problems += list(kb.problems)
+                summary = (
+                    f"{kb.rules.file}: ok: {kb.n} propositions, {len(kb.classes)} classes, "
+                    f"|r(L)| = {kb.r_count}"
+                )
+            except RuleFileError as exc:
+                problems += list(exc.problems)
+                summary = ""
+        problems.sort(key=lambda p: (p.file, p.line, p.column))
         for problem in problems:
             print(problem, file=sys.stderr)
         if any(p.severity == "error" for p in problems):
