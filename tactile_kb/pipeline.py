@@ -107,12 +107,14 @@ def knowledge_base(rules: RulesLike) -> KnowledgeBase:
     return kb
 
 
-def binding_problems(rules: RuleSet) -> list[Problem]:
+def binding_problems(rules: RuleSet, *, missing: str = "error") -> list[Problem]:
     """Every proposition of ``rules`` whose feature binding is missing or wrong, located.
 
     A rule file binds each proposition to a feature extractor by name with parameters; the
     names are checked here against the feature registry (built-ins and plugins) and the
-    parameters against the extractor's signature.
+    parameters against the extractor's signature. A proposition with no binding is reported
+    with severity ``missing``: an error for classifying objects, a warning for a rule file
+    used only for its logic (``tactile-kb compile``, ``query``).
     """
     problems = []
     for i, prop in enumerate(rules.propositions):
@@ -120,7 +122,9 @@ def binding_problems(rules: RuleSet) -> list[Problem]:
             problems.append(
                 rules.problem(
                     ("propositions", i),
-                    f"no feature decides proposition {prop.id!r} (add feature: NAME)",
+                    f"no feature decides proposition {prop.id!r}, so objects cannot be "
+                    "classified with this file (add feature: NAME)",
+                    severity=missing,
                 )
             )
             continue

@@ -72,7 +72,7 @@ def run_validate(args: argparse.Namespace) -> int:
             # checked together, so that every problem is listed at once.
             from tactile_kb.pipeline import binding_problems
 
-            problems = binding_problems(rules)
+            problems = binding_problems(rules, missing="warning")
             try:
                 kb = compile_rules(rules)
                 problems += list(kb.problems)
