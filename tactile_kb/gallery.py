@@ -6,7 +6,8 @@ Regenerate every picture of ``docs/gallery.md`` with one command::
 
 Each Fig. 5 object is explored by the stepper with the 33-sensor finger, classified with the
 packaged ``parallelepipeds`` rules and grasped; the L, T and U box unions (the paper's Fig. 1)
-are explored with the 4-sensor finger and drawn with their layer contours; the choice tree of
+are explored with the 4-sensor finger, grasped on their stacked layer contours and drawn with
+them; the choice tree of
 the rules is drawn with the path the cube's decision took. Pictures are small PNGs (modest
 DPI) so the repository stays light.
 """
@@ -76,6 +77,7 @@ def build_gallery(
     """
     from tactile_kb.explorers import get_explorer
     from tactile_kb.grasp import plan_grasp
+    from tactile_kb.model import build_model
     from tactile_kb.pipeline import classify, knowledge_base
     from tactile_kb.plot import plot_classification, plot_exploration, plot_tree
     from tactile_kb.solids import fig5_objects
@@ -103,18 +105,26 @@ def build_gallery(
     for name, make in _union_specs():
         mesh = make()
         record = explorer.explore(mesh, finger="4", seed=0)
+        model = build_model(record)
+        plan = plan_grasp(model)
         target = directory / f"{name.lower()}-union.png"
+        grasp = (
+            f"grasp {plan.best.width * 1000:.0f} mm, "
+            f"{plan.best.com_offset * 1000:.1f} mm from the centre of mass"
+            if plan.best
+            else f"no grasp: {plan.reason}"
+        )
         plot_exploration(
-            record,
+            model,
             target,
             mesh=mesh,
-            grasp=None,
-            title=f"{name} box union, 4-sensor finger: {record.touches} touches",
+            grasp=plan,
+            title=f"{name} box union, 4-sensor finger: {record.touches} touches\n{grasp}",
             size=size,
             dpi=dpi,
         )
         written.append(target)
-        say(f"{target}: {record.touches} touches, {len(record.layers)} layers")
+        say(f"{target}: {record.touches} touches, {len(record.layers)} layers, {grasp}")
     target = directory / "tree-cube.png"
     plot_tree(kb, target, decision=cube_decision, size=(size[0] * 1.6, size[1] * 1.4), dpi=dpi)
     written.append(target)

@@ -17,11 +17,28 @@ object's center of mass." :func:`plan_grasp` turns that sentence into a plan:
    contacts lies inside both friction cones) and a quality measure, the soft-finger
    Ferrari–Canny ε (:func:`ferrari_canny`), with the least total contact force that holds the
    object against gravity (:func:`least_force`) beside it.
-4. **Ranking** by the angle between the planes (whole degrees), then the offset of the grasp
+4. **Ranking** by the angle between the planes (in steps of :data:`RANK_ANGLE_STEP_DEG`, 2°:
+   angles within the noise of a measurement count as equal), then the offset of the grasp
    line from the centre of mass (whole millimetres), then the jaw opening (narrower first).
 
 When no pair survives, :attr:`GraspPlan.reason` says why: no parallel pair, every pair wider
 than the pincers, the grasp line outside a face, or only the table face.
+
+**Objects made of boxes** (the paper's Fig. 1) are explored in layers, and their model is not
+a convex polyhedron: the 4-sensor finger never touches the top (the planes stay open), and
+with the 33-sensor finger the polyhedron is only the convex envelope. Their grasp is planned
+on the stacked layer contours instead (:func:`section_solid`): each contour polygon is
+extruded as vertical walls, from the table to the highest layer at which contact was kept (or
+to the top when the finger touched it), consecutive layers with the same contour forming one
+block. The centre of mass is that of the extruded polygons; the pairs are antiparallel sides
+of a block's contour facing away from each other; the grasp line is horizontal, at the height
+of the centre of mass (kept ``margin`` inside the block), along the pair's common normal; and
+besides the margins it must satisfy two conditions of a non-convex body: the segment between
+the two grasp points lies inside the material (no grasp across the notch of a U), and each
+jaw, a pad of radius ``margin`` approaching horizontally from outside along the grasp line,
+meets no other part of the object on its way. When the centre of mass lies outside the
+material (an L) the line passing closest to it wins, and its offset is reported.
+:attr:`GraspPlan.notes` states the height assumption.
 
 The contact model (the pincers' pads are soft): each contact pushes with a force inside its
 friction cone (linearised by ``cone_edges`` unit forces on the cone's boundary, one of them
@@ -55,7 +72,9 @@ from typing import Any
 
 import numpy as np
 import shapely
+import shapely.geometry
 import shapely.ops
+import shapely.validation
 import trimesh
 from numpy.typing import ArrayLike, NDArray
 from scipy.optimize import linprog
@@ -76,13 +95,17 @@ __all__ = [
     "DEFAULT_PAD_RADIUS",
     "GRAVITY",
     "QUALITY_MEASURE",
+    "RANK_ANGLE_STEP_DEG",
     "GraspCandidate",
     "GraspPlan",
     "Rejection",
+    "SectionBlock",
+    "SectionSolid",
     "ferrari_canny",
     "force_closure",
     "least_force",
     "plan_grasp",
+    "section_solid",
     "torque_scale",
     "wrench_primitives",
 ]
@@ -113,11 +136,25 @@ DEFAULT_DENSITY = 1000.0
 GRAVITY = 9.81
 """m/s²."""
 
+RANK_ANGLE_STEP_DEG = 2.0
+"""Candidates whose planes' angles fall in the same step of this many degrees rank as equally
+parallel (0.4° and 0.6° apart are both "parallel" to a finger with 0.5 mm of noise)."""
+
 QUALITY_MEASURE = "ferrari_canny_soft"
 """The name of :attr:`GraspCandidate.quality` in JSON output."""
 
 TABLE_ANGLE_DEG = 5.0
 TABLE_HEIGHT_TOL = 0.002
+
+SAME_CONTOUR = 0.05
+"""Consecutive layers form one block when their contours differ by less than this fraction of
+the smaller one's area (symmetric difference)."""
+
+TOP_NORMAL_DEG = 20.0
+"""A contact whose normal is within this angle of "up" touched a top."""
+
+SECTION_TOL = 0.001
+"""Gaps and obstacles thinner than this (m) along the grasp line are slivers of noise."""
 
 _UP = np.array([0.0, 0.0, 1.0])
 
@@ -321,6 +358,192 @@ def _second_moment(poly: Polyhedron) -> float:
 
 
 # ---------------------------------------------------------------------------------------------
+# The layered model of objects made of boxes
+# ---------------------------------------------------------------------------------------------
+
+
+def _polygon_moments(polygon: FloatArray) -> tuple[float, FloatArray, float]:
+    """Area, centroid and E|p − c|² (m²) of a simple polygon given counter-clockwise."""
+    x, y = polygon[:, 0], polygon[:, 1]
+    xn, yn = np.roll(x, -1), np.roll(y, -1)
+    cross = x * yn - xn * y
+    area = 0.5 * float(cross.sum())
+    cx = float(((x + xn) * cross).sum()) / (6.0 * area)
+    cy = float(((y + yn) * cross).sum()) / (6.0 * area)
+    ixx = float(((y * y + y * yn + yn * yn) * cross).sum()) / 12.0  # ∫ y² dA
+    iyy = float(((x * x + x * xn + xn * xn) * cross).sum()) / 12.0  # ∫ x² dA
+    return area, np.array([cx, cy]), (ixx + iyy) / area - (cx * cx + cy * cy)
+
+
+@dataclass(frozen=True, eq=False)
+class SectionBlock:
+    """Material between heights ``z0`` and ``z1`` whose horizontal section is ``polygon``.
+
+    Attributes
+    ----------
+    polygon
+        (k, 2) corners, counter-clockwise seen from above; side k joins corners k and k + 1.
+    z0, z1
+        The block's bottom and top, metres.
+    layers
+        Indices of the exploration layers (:attr:`~tactile_kb.model.ObjectModel.layers`) it
+        comes from.
+    """
+
+    polygon: FloatArray
+    z0: float
+    z1: float
+    layers: tuple[int, ...]
+
+    @property
+    def shape(self) -> shapely.Polygon:
+        """The polygon as a shapely polygon."""
+        return shapely.Polygon(self.polygon)
+
+    @property
+    def area(self) -> float:
+        """Area of the section, m²."""
+        return _polygon_moments(self.polygon)[0]
+
+    @property
+    def volume(self) -> float:
+        """Volume of the block, m³."""
+        return self.area * (self.z1 - self.z0)
+
+
+@dataclass(frozen=True, eq=False)
+class SectionSolid:
+    """A prism-like model of a layered exploration: contour polygons extruded as vertical walls.
+
+    Attributes
+    ----------
+    blocks
+        Bottom up; the first stands on the table (z = 0), the last ends at ``height``.
+    height
+        The top: the touched top when ``top_touched``, else the highest layer at which contact
+        was kept (a lower bound: the true top lies below the next z-increment).
+    top_touched
+        True when a contact found a top above the highest layer.
+    volume
+        m³.
+    centroid
+        The centre of mass (uniform density), metres.
+    second_moment
+        E|x − c|² over the solid, m² (λ = √(2 · second_moment) is its :func:`torque_scale`).
+    """
+
+    blocks: tuple[SectionBlock, ...]
+    height: float
+    top_touched: bool
+    volume: float
+    centroid: tuple[float, float, float]
+    second_moment: float
+
+    @property
+    def torque_scale(self) -> float:
+        """λ = √(tr I / m), metres."""
+        return math.sqrt(2.0 * self.second_moment)
+
+    @property
+    def note(self) -> str:
+        """The height assumption in words."""
+        top = (
+            "the top the finger touched"
+            if self.top_touched
+            else "the highest layer at which contact was kept (the top was not touched: the "
+            "true top lies higher, up to one z-increment, and the centre of mass with it)"
+        )
+        blocks = "" if len(self.blocks) == 1 else f" in {len(self.blocks)} blocks"
+        return (
+            f"planned on the layer contours extruded as vertical walls{blocks} from the table "
+            f"to z = {self.height * 1000:.1f} mm, {top}"
+        )
+
+
+def _layer_polygon(contour: FloatArray) -> FloatArray | None:
+    """A layer contour as a simple counter-clockwise polygon (the largest part), or None."""
+    c = np.asarray(contour, dtype=float).reshape(-1, 2)
+    if len(c) < 3:
+        return None
+    shape = shapely.Polygon(c)
+    if not shape.is_valid:
+        fixed = shapely.validation.make_valid(shape)
+        parts = [g for g in getattr(fixed, "geoms", [fixed]) if isinstance(g, shapely.Polygon)]
+        if not parts:
+            return None
+        shape = max(parts, key=lambda g: g.area)
+    if shape.area <= 1e-8:  # below 0.1 cm²: not a section of an object
+        return None
+    shape = shapely.geometry.polygon.orient(shape.simplify(0.0), 1.0)
+    return np.asarray(shape.exterior.coords, dtype=float)[:-1]
+
+
+def section_solid(model: ObjectModel) -> SectionSolid | None:
+    """The layered model of ``model``: its closed layer contours extruded, or None without any.
+
+    Consecutive layers whose contours differ by less than :data:`SAME_CONTOUR` of their area
+    form one block (its polygon is the smaller contour); block boundaries lie half-way between
+    layers, the first block starts on the table (z = 0), and the last ends at the top the
+    finger touched, or else at the highest layer (the walls are assumed vertical).
+
+    Examples
+    --------
+    >>> from tactile_kb.finger import builtin_finger
+    >>> from tactile_kb.model import build_model
+    >>> from tactile_kb.solids import l_shape
+    >>> from tactile_kb.synthetic import sample_layers
+    >>> record = sample_layers(l_shape(0.12, 0.08, 0.04, 0.04), builtin_finger("4"), [0.01, 0.03])
+    >>> solid = section_solid(build_model(record))
+    >>> len(solid.blocks), solid.height, solid.top_touched
+    (1, 0.03, False)
+    >>> [round(x, 4) + 0.0 for x in solid.centroid], round(solid.volume * 1e6, 1)
+    ([-0.01, -0.01, 0.015], 192.0)
+    """
+    layers = []
+    for lay in sorted(model.layers, key=lambda s: s.z):
+        if not lay.closed:
+            continue
+        poly = _layer_polygon(lay.contour)
+        if poly is not None:
+            layers.append((lay.index, lay.z, poly))
+    if not layers:
+        return None
+    top_layer = layers[-1][1]
+    cos_up = math.cos(math.radians(TOP_NORMAL_DEG))
+    tops = [c.point[2] for c in model.record.contacts if c.normal[2] >= cos_up]
+    touched = [z for z in tops if z > top_layer + SECTION_TOL]
+    height = max(touched) if touched else top_layer
+    groups: list[list[tuple[int, float, FloatArray]]] = [[layers[0]]]
+    for item in layers[1:]:
+        a, b = shapely.Polygon(groups[-1][-1][2]), shapely.Polygon(item[2])
+        if a.symmetric_difference(b).area <= SAME_CONTOUR * min(a.area, b.area):
+            groups[-1].append(item)
+        else:
+            groups.append([item])
+    blocks = []
+    for k, group in enumerate(groups):
+        z0 = 0.0 if k == 0 else (groups[k - 1][-1][1] + group[0][1]) / 2.0
+        z1 = height if k == len(groups) - 1 else (group[-1][1] + groups[k + 1][0][1]) / 2.0
+        poly = min((g[2] for g in group), key=lambda p: _polygon_moments(p)[0])
+        blocks.append(SectionBlock(poly, z0, z1, tuple(g[0] for g in group)))
+    masses, centres, spreads = [], [], []
+    for b in blocks:
+        area, c, spread = _polygon_moments(b.polygon)
+        h = b.z1 - b.z0
+        masses.append(area * h)
+        centres.append([c[0], c[1], (b.z0 + b.z1) / 2.0])
+        spreads.append(spread + h * h / 12.0)  # about the block's own centroid
+    m = np.asarray(masses)
+    volume = float(m.sum())
+    if volume <= 0.0:
+        return None
+    cs = np.asarray(centres)
+    com = (m[:, None] * cs).sum(axis=0) / volume
+    second = float((m * (np.asarray(spreads) + ((cs - com) ** 2).sum(axis=1))).sum()) / volume
+    return SectionSolid(tuple(blocks), height, bool(touched), volume, _vec(com), second)
+
+
+# ---------------------------------------------------------------------------------------------
 # Planning
 # ---------------------------------------------------------------------------------------------
 
@@ -349,6 +572,10 @@ class GraspCandidate:
         Soft-finger Ferrari–Canny ε (see :func:`ferrari_canny`).
     least_force
         Least total contact force holding the object against gravity, N (None: cannot).
+    section
+        For a grasp planned on the layer contours: the index of the block in
+        :attr:`SectionSolid.blocks`, and ``faces`` are sides of its contour (side k joins
+        corners k and k + 1); None for polyhedron faces.
     """
 
     faces: tuple[int, int]
@@ -360,11 +587,14 @@ class GraspCandidate:
     force_closure: bool
     quality: float
     least_force: float | None
+    section: int | None = None
 
     @property
     def rank_key(self) -> tuple[int, int, float]:
-        """Angle in whole degrees, then COM offset in whole millimetres, then the opening."""
-        return (round(self.angle_deg), round(self.com_offset * 1000.0), self.width)
+        """Angle in steps of :data:`RANK_ANGLE_STEP_DEG`, then COM offset in whole millimetres,
+        then the opening."""
+        step = math.floor(self.angle_deg / RANK_ANGLE_STEP_DEG + 1e-9)
+        return (step, round(self.com_offset * 1000.0), self.width)
 
     def to_dict(self) -> dict[str, Any]:
         """The candidate as JSON-ready values."""
@@ -378,6 +608,7 @@ class GraspCandidate:
             "quality": _r(self.quality),
             "least_force": None if self.least_force is None else _r(self.least_force, 4),
             "force_closure": self.force_closure,
+            "section": self.section,
         }
 
 
@@ -387,13 +618,20 @@ class Rejection:
 
     faces: tuple[int, int]
     kind: str
-    """``"table"``, ``"too_wide"``, ``"too_narrow"``, ``"outside_face"`` or ``"not_closed"``."""
+    """``"table"``, ``"too_wide"``, ``"too_narrow"``, ``"outside_face"``, ``"not_closed"``,
+    ``"outside_material"`` (the segment between the grasp points leaves the object) or
+    ``"jaw_collision"`` (a jaw meets another part of the object on its way in)."""
     message: str
 
 
 @dataclass(frozen=True)
 class GraspPlan:
-    """The best grasp of an object and the ranked alternatives, or why there is none."""
+    """The best grasp of an object and the ranked alternatives, or why there is none.
+
+    ``basis`` names the model the grasp was planned on: ``"polyhedron"`` (the enveloping
+    polyhedron's faces) or ``"sections"`` (the layer contours extruded, :attr:`solid`);
+    ``notes`` state the assumptions made (the height of a layered object).
+    """
 
     object: str
     best: GraspCandidate | None
@@ -403,6 +641,9 @@ class GraspPlan:
     com: tuple[float, float, float] | None = None
     mass: float | None = None
     params: dict[str, float] = field(default_factory=dict)
+    basis: str = "polyhedron"
+    notes: tuple[str, ...] = ()
+    solid: SectionSolid | None = None
 
     @property
     def ok(self) -> bool:
@@ -427,6 +668,8 @@ class GraspPlan:
             "com": None if self.com is None else [_r(x) for x in self.com],
             "mass": None if self.mass is None else _r(self.mass),
             "candidates": len(self.candidates),
+            "basis": self.basis,
+            "notes": list(self.notes),
         }
 
 
@@ -531,82 +774,142 @@ def plan_grasp(
         "pad_radius": pad_radius,
     }
     poly = model.polyhedron
-    if poly is None:
-        why = model.open_reason or "the touched planes do not bound a region"
-        return GraspPlan(name, None, (), f"no closed model to grasp: {why}", params=params)
+    solid = section_solid(model) if poly is None or not model.convex else None
+
+    def assess(
+        pair: tuple[int, int],
+        points: FloatArray,
+        normals: FloatArray,
+        angle: float,
+        offset: float,
+        com: FloatArray,
+        scale: float,
+        weight: float,
+        section: int | None,
+    ) -> GraspCandidate | Rejection:
+        width = float(np.linalg.norm(points[0] - points[1]))
+        if width > max_opening:
+            return Rejection(
+                pair,
+                "too_wide",
+                f"{width * 1000:.1f} mm apart, wider than the pincers "
+                f"({max_opening * 1000:.1f} mm)",
+            )
+        if width < min_opening:
+            return Rejection(pair, "too_narrow", f"{width * 1000:.1f} mm apart, below the minimum")
+        closed = force_closure(points, normals, mu=mu)
+        eps = ferrari_canny(
+            points,
+            normals,
+            com,
+            mu=mu,
+            pad_radius=pad_radius,
+            cone_edges=cone_edges,
+            torque_scale=scale,
+        )
+        force = least_force(
+            points, normals, com, weight, mu=mu, pad_radius=pad_radius, cone_edges=cone_edges
+        )
+        return GraspCandidate(
+            faces=pair,
+            points=(_vec(points[0]), _vec(points[1])),
+            normals=(_vec(normals[0]), _vec(normals[1])),
+            angle_deg=angle,
+            com_offset=offset,
+            width=width,
+            force_closure=closed,
+            quality=eps,
+            least_force=force,
+            section=section,
+        )
+
     limit = math.degrees(math.atan(mu)) if max_angle_deg is None else max_angle_deg
-    com = np.asarray(poly.centroid, dtype=float)
-    weight = float(mass) if mass is not None else density * poly.volume
-    scale = torque_scale(poly)
-    table = _table_faces(model, poly)
-    nf = len(poly.faces)
     candidates: list[GraspCandidate] = []
     rejected: list[Rejection] = []
-    parallel = 0
-    for i in range(nf):
-        for j in range(i + 1, nf):
-            ni, nj = poly.normals[i], poly.normals[j]
-            angle = math.degrees(math.acos(float(np.clip(-np.dot(ni, nj), -1.0, 1.0))))
-            if angle > limit + 1e-9:
-                continue
-            parallel += 1
-            pair = (i, j)
-            if i in table or j in table:
-                rejected.append(Rejection(pair, "table", "uses the table face (the support)"))
-                continue
-            got = _grasp_on_pair(poly, pair, com, margin, max_com_offset)
-            if isinstance(got, Rejection):
-                rejected.append(got)
-                continue
-            points, offset = got
-            width = float(np.linalg.norm(points[0] - points[1]))
-            if width > max_opening:
-                rejected.append(
-                    Rejection(
-                        pair,
-                        "too_wide",
-                        f"{width * 1000:.1f} mm apart, wider than the pincers "
-                        f"({max_opening * 1000:.1f} mm)",
+    notes: tuple[str, ...] = ()
+    if solid is not None:
+        basis = "sections"
+        com = np.asarray(solid.centroid, dtype=float)
+        weight = float(mass) if mass is not None else density * solid.volume
+        scale = solid.torque_scale
+        notes = (solid.note,)
+        parallel = 0
+        for b in range(len(solid.blocks)):
+            for pair, angle, found in _section_pairs(solid, b, com, limit, margin, max_com_offset):
+                parallel += 1
+                if isinstance(found, Rejection):
+                    rejected.append(found)
+                    continue
+                points, normals, offset = found
+                out = assess(pair, points, normals, angle, offset, com, scale, weight, b)
+                if isinstance(out, Rejection):
+                    rejected.append(out)
+                else:
+                    candidates.append(out)
+    else:
+        if poly is None:
+            why = model.open_reason or "the touched planes do not bound a region"
+            if model.layers:
+                why += "; no layer contour closed"
+            return GraspPlan(name, None, (), f"no closed model to grasp: {why}", params=params)
+        basis = "polyhedron"
+        com = np.asarray(poly.centroid, dtype=float)
+        weight = float(mass) if mass is not None else density * poly.volume
+        scale = torque_scale(poly)
+        if not model.convex:
+            notes = (
+                "the model is not convex and has no layer contours: its centre of mass is that "
+                "of the convex envelope, and grasp lines crossing a concave face are refused",
+            )
+        table = _table_faces(model, poly)
+        nf = len(poly.faces)
+        parallel = 0
+        for i in range(nf):
+            for j in range(i + 1, nf):
+                ni, nj = poly.normals[i], poly.normals[j]
+                angle = math.degrees(math.acos(float(np.clip(-np.dot(ni, nj), -1.0, 1.0))))
+                if angle > limit + 1e-9:
+                    continue
+                parallel += 1
+                pair = (i, j)
+                if i in table or j in table:
+                    rejected.append(Rejection(pair, "table", "uses the table face (the support)"))
+                    continue
+                got = _grasp_on_pair(poly, pair, com, margin, max_com_offset)
+                if isinstance(got, Rejection):
+                    rejected.append(got)
+                    continue
+                points, offset = got
+                if not model.convex and _crosses_concave_face(model, points):
+                    rejected.append(
+                        Rejection(
+                            pair,
+                            "outside_material",
+                            "the segment between the grasp points crosses a concave face",
+                        )
                     )
-                )
-                continue
-            if width < min_opening:
-                rejected.append(
-                    Rejection(pair, "too_narrow", f"{width * 1000:.1f} mm apart, below the minimum")
-                )
-                continue
-            normals = np.vstack([ni, nj])
-            closed = force_closure(points, normals, mu=mu)
-            eps = ferrari_canny(
-                points,
-                normals,
-                com,
-                mu=mu,
-                pad_radius=pad_radius,
-                cone_edges=cone_edges,
-                torque_scale=scale,
-            )
-            force = least_force(
-                points, normals, com, weight, mu=mu, pad_radius=pad_radius, cone_edges=cone_edges
-            )
-            candidates.append(
-                GraspCandidate(
-                    faces=pair,
-                    points=(_vec(points[0]), _vec(points[1])),
-                    normals=(_vec(ni), _vec(nj)),
-                    angle_deg=angle,
-                    com_offset=offset,
-                    width=width,
-                    force_closure=closed,
-                    quality=eps,
-                    least_force=force,
-                )
-            )
+                    continue
+                normals = np.vstack([ni, nj])
+                out = assess(pair, points, normals, angle, offset, com, scale, weight, None)
+                if isinstance(out, Rejection):
+                    rejected.append(out)
+                else:
+                    candidates.append(out)
     candidates.sort(key=lambda c: c.rank_key)
     best = next((c for c in candidates if c.force_closure), None)
     reason = "" if best is not None else _reason(parallel, limit, candidates, rejected)
     return GraspPlan(
-        name, best, tuple(candidates), reason, tuple(rejected), _vec(com), weight, params
+        name,
+        best,
+        tuple(candidates),
+        reason,
+        tuple(rejected),
+        _vec(com),
+        weight,
+        params,
+        basis,
+        notes,
+        solid,
     )
 
 
@@ -650,6 +953,227 @@ def _grasp_on_pair(
     return np.vstack([base + ti * axis, base + tj * axis]), offset
 
 
+Interval = tuple[float, float]
+
+
+def _subtract(keep: list[Interval], bad: list[Interval]) -> list[Interval]:
+    """The closed intervals ``keep`` minus the open intervals ``bad``."""
+    out = keep
+    for lo, hi in bad:
+        nxt = []
+        for a, b in out:
+            if hi <= a or lo >= b:
+                nxt.append((a, b))
+                continue
+            if a < lo:
+                nxt.append((a, lo))
+            if hi < b:
+                nxt.append((hi, b))
+        out = nxt
+    return out
+
+
+def _parts(geom: shapely.Geometry) -> list[shapely.Polygon]:
+    if isinstance(geom, shapely.Polygon):
+        return [] if geom.is_empty else [geom]
+    return [g for g in getattr(geom, "geoms", []) if isinstance(g, shapely.Polygon)]
+
+
+def _spans(geom: shapely.Geometry, u: FloatArray, a: FloatArray, grow: float) -> list[Interval]:
+    """The u-extents (grown by ``grow``) of the parts of ``geom`` thicker than the tolerance
+    along ``a``: the grasp lines ``x · u = s`` they block."""
+    out = []
+    for part in _parts(geom):
+        xy = np.asarray(part.exterior.coords, dtype=float)
+        along = xy @ a
+        if along.max() - along.min() < SECTION_TOL or part.area <= 0.0:
+            continue
+        across = xy @ u
+        out.append((float(across.min()) - grow, float(across.max()) + grow))
+    return out
+
+
+def _side_range(
+    start: FloatArray, end: FloatArray, u: FloatArray, margin: float
+) -> Interval | None:
+    """The lines ``x · u = s`` meeting side start→end at least ``margin`` from its ends."""
+    length = float(np.linalg.norm(end - start))
+    if length < 2.0 * margin or length <= 0.0:
+        return None
+    e = (end - start) / length
+    s0 = float(start @ u) + float(e @ u) * margin
+    s1 = float(start @ u) + float(e @ u) * (length - margin)
+    return (min(s0, s1), max(s0, s1))
+
+
+def _section_pairs(
+    solid: SectionSolid,
+    index: int,
+    com: FloatArray,
+    limit: float,
+    margin: float,
+    max_offset: float,
+) -> list[tuple[tuple[int, int], float, tuple[FloatArray, FloatArray, float] | Rejection]]:
+    """Every pair of antiparallel sides of block ``index`` facing away from each other, with
+    its grasp (points, outward normals, offset from ``com``) or why there is none."""
+    block = solid.blocks[index]
+    poly = block.polygon
+    k = len(poly)
+    starts, ends = poly, np.roll(poly, -1, axis=0)
+    d = ends - starts
+    lengths = np.linalg.norm(d, axis=1)
+    good = lengths > 1e-9
+    normals = np.zeros_like(d)
+    normals[good] = np.column_stack([d[good, 1], -d[good, 0]]) / lengths[good, None]
+    offsets = np.einsum("ij,ij->i", normals, starts)
+    shape = block.shape
+    low, high = block.z0 + margin, block.z1 - margin
+    z = float(np.clip(com[2], low, high)) if low <= high else float(com[2])
+    band = shapely.ops.unary_union(
+        [b.shape for b in solid.blocks if b.z0 < z + margin and b.z1 > z - margin]
+    )
+    lo_xy, hi_xy = poly.min(axis=0), poly.max(axis=0)
+    far = 2.0 * float(np.linalg.norm(hi_xy - lo_xy)) + 1.0
+    target = com[:2]
+    out: list[tuple[tuple[int, int], float, tuple[FloatArray, FloatArray, float] | Rejection]] = []
+    for i in range(k):
+        for j in range(i + 1, k):
+            if not (good[i] and good[j]):
+                continue
+            ni, nj = normals[i], normals[j]
+            angle = math.degrees(math.acos(float(np.clip(-ni @ nj, -1.0, 1.0))))
+            if angle > limit + 1e-9:
+                continue
+            a = _unit(ni - nj)  # along the grasp line, towards side i
+            if ((starts[i] + ends[i]) / 2.0 - (starts[j] + ends[j]) / 2.0) @ a <= SECTION_TOL:
+                continue  # the sides look at each other (the walls of a notch)
+            pair = (i, j)
+            out.append(
+                (
+                    pair,
+                    angle,
+                    _section_grasp(
+                        pair,
+                        a,
+                        (starts, ends, normals, offsets),
+                        shape,
+                        band,
+                        far,
+                        z,
+                        (low, high),
+                        target,
+                        com,
+                        margin,
+                        max_offset,
+                    ),
+                )
+            )
+    return out
+
+
+def _section_grasp(
+    pair: tuple[int, int],
+    a: FloatArray,
+    sides: tuple[FloatArray, FloatArray, FloatArray, FloatArray],
+    shape: shapely.Polygon,
+    band: shapely.Geometry,
+    far: float,
+    z: float,
+    heights: Interval,
+    target: FloatArray,
+    com: FloatArray,
+    margin: float,
+    max_offset: float,
+) -> tuple[FloatArray, FloatArray, float] | Rejection:
+    starts, ends, normals, offsets = sides
+    i, j = pair
+    if heights[0] > heights[1]:
+        return Rejection(
+            pair,
+            "outside_face",
+            f"the sides are {(heights[1] - heights[0]) * 1000 + 2 * margin * 1000:.1f} mm high, "
+            f"less than twice the margin ({margin * 1000:.1f} mm)",
+        )
+    u = np.array([-a[1], a[0]])
+    ri = _side_range(starts[i], ends[i], u, margin)
+    rj = _side_range(starts[j], ends[j], u, margin)
+    if ri is None or rj is None or max(ri[0], rj[0]) > min(ri[1], rj[1]):
+        return Rejection(
+            pair, "outside_face", f"no grasp line stays {margin * 1000:.1f} mm inside both sides"
+        )
+    s0, s1 = max(ri[0], rj[0]), min(ri[1], rj[1])
+
+    def at(side: int, s: float) -> FloatArray:
+        """Where the line x · u = s meets the line of ``side``."""
+        n = normals[side]
+        t = (offsets[side] - s * float(n @ u)) / float(n @ a)
+        return np.asarray(s * u + t * a, dtype=float)
+
+    feasible = [(s0, s1)]
+    if s1 - s0 > 1e-12:
+        between = shapely.Polygon([at(i, s0), at(i, s1), at(j, s1), at(j, s0)])
+        feasible = _subtract(feasible, _spans(between.difference(shape), u, a, 0.0))
+    elif not shape.buffer(1e-9).covers(shapely.LineString([at(i, s0), at(j, s0)])):
+        feasible = []
+    if not feasible:
+        return Rejection(
+            pair,
+            "outside_material",
+            "the segment between the grasp points leaves the material (a gap between the sides)",
+        )
+    for side, sign in ((i, 1.0), (j, -1.0)):
+        near0, near1 = at(side, s0 - margin), at(side, s1 + margin)
+        push = sign * a * SECTION_TOL
+        corridor = shapely.Polygon(
+            [near0 + push, near1 + push, near1 + sign * far * a, near0 + sign * far * a]
+        )
+        feasible = _subtract(feasible, _spans(corridor.intersection(band), u, a, margin))
+    if not feasible:
+        return Rejection(
+            pair,
+            "jaw_collision",
+            "a jaw approaching along the grasp line meets another part of the object",
+        )
+    want = float(target @ u)
+    s = min((float(np.clip(want, lo, hi)) for lo, hi in feasible), key=lambda v: abs(v - want))
+    offset = math.hypot(s - want, z - float(com[2]))
+    if offset > max_offset:
+        return Rejection(
+            pair,
+            "outside_face",
+            f"the grasp line through the centre of mass leaves a side: the nearest line inside "
+            f"both is {offset * 1000:.1f} mm off (limit {max_offset * 1000:.1f} mm)",
+        )
+    pi, pj = at(i, s), at(j, s)
+    points = np.array([[pi[0], pi[1], z], [pj[0], pj[1], z]])
+    normals3 = np.array([[*normals[i], 0.0], [*normals[j], 0.0]])
+    return points, normals3, offset
+
+
+def _crosses_concave_face(model: ObjectModel, points: FloatArray) -> bool:
+    """True when the segment between ``points`` passes through a concave face's touched area
+    (so it leaves the material): its crossing lies within the face's contacts, grown by ρ."""
+    p0, p1 = points
+    rho = model.record.tip_radius
+    centres = np.asarray([c.centre for c in model.record.contacts], dtype=float).reshape(-1, 3)
+    for face, supports in zip(model.faces, model.supporting, strict=True):
+        if supports or not face.contacts:
+            continue
+        n = face.normal_array
+        s0, s1 = float(n @ p0) - face.offset, float(n @ p1) - face.offset
+        if not (
+            (s0 < -SECTION_TOL and s1 > SECTION_TOL) or (s0 > SECTION_TOL and s1 < -SECTION_TOL)
+        ):
+            continue
+        q = p0 + s0 / (s0 - s1) * (p1 - p0)
+        u, v = _basis(n)
+        pts = centres[list(face.contacts)] - rho * n
+        hull = shapely.MultiPoint(np.column_stack([pts @ u, pts @ v])).convex_hull
+        if hull.buffer(max(rho, SECTION_TOL)).covers(shapely.Point(float(q @ u), float(q @ v))):
+            return True
+    return False
+
+
 def _reason(
     parallel: int, limit: float, candidates: list[GraspCandidate], rejected: list[Rejection]
 ) -> str:
@@ -665,4 +1189,20 @@ def _reason(
         return "every parallel pair is wider than the pincers: " + usable[0].message
     if all(r.kind == "outside_face" for r in usable):
         return "the grasp line lies outside a face for every parallel pair: " + usable[0].message
-    return "; ".join(sorted({f"faces {r.faces[0]}-{r.faces[1]}: {r.message}" for r in usable}))
+    if all(r.kind == "outside_material" for r in usable):
+        return "the grasp segment leaves the material for every parallel pair: " + usable[0].message
+    if all(r.kind == "jaw_collision" for r in usable):
+        return "a jaw would hit the object for every parallel pair: " + usable[0].message
+    counts = {kind: sum(1 for r in usable if r.kind == kind) for kind in _KINDS}
+    parts = [f"{n} {_KINDS[kind]}" for kind, n in counts.items() if n]
+    return "no parallel pair gives a grasp: " + ", ".join(parts)
+
+
+_KINDS = {
+    "too_wide": "wider than the pincers",
+    "too_narrow": "narrower than the least opening",
+    "outside_face": "with the grasp line outside a face",
+    "outside_material": "with the grasp segment leaving the material",
+    "jaw_collision": "with a jaw blocked by the object",
+    "not_closed": "not in force closure",
+}

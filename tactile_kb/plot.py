@@ -6,8 +6,10 @@ global state leaks between calls and nothing needs a display), returns it, and w
 ``size`` inches at ``dpi`` (640 × 480 pixels by default).
 
 * :func:`plot_exploration`: the object mesh (faint, when given), the finger's path, its
-  contacts coloured by the sensor that fired, the reconstructed polyhedron, the chosen grasp;
-  for objects explored in layers, a second panel with the contour polygon of each layer.
+  contacts coloured by the sensor that fired, the reconstructed polyhedron (dashed when it is
+  only the convex envelope of a non-convex object), the chosen grasp; for objects explored in
+  layers, the extruded layer model the grasp was planned on, and a second panel with the
+  contour polygon of each layer, the grasp and the centre of mass seen from above.
 * :func:`plot_tree`: a rule file's choice tree (the paper's Fig. 3): the phases in order, the
   values of their propositions on each branch, the classes at the leaves, with the path a
   decision took highlighted.
@@ -42,7 +44,7 @@ from mpl_toolkits.mplot3d.art3d import (  # type: ignore[import-untyped]
 )
 
 from tactile_kb.errors import UsageError
-from tactile_kb.grasp import GraspPlan
+from tactile_kb.grasp import GraspPlan, SectionSolid
 from tactile_kb.model import ObjectModel, build_model
 from tactile_kb.record import ExplorationRecord
 
@@ -181,11 +183,25 @@ def _draw_3d(
             bar.ax.tick_params(labelsize=6)
         extent.append(pts)
     poly = model.polyhedron if model is not None else None
+    solid = grasp.solid if grasp is not None else None
     if poly is not None:
         segs = [poly.vertices[[i, j]] for i, j in poly.edges]
-        ax.add_collection3d(Line3DCollection(segs, colors=_MODEL, linewidths=1.2))
-        ax.plot([], [], [], color=_MODEL, lw=1.2, label="polyhedron")
+        if model is not None and not model.convex:  # only the convex envelope of the object
+            ax.add_collection3d(
+                Line3DCollection(
+                    segs, colors=_MODEL, linewidths=0.6, linestyles="dashed", alpha=0.5
+                )
+            )
+            ax.plot([], [], [], color=_MODEL, lw=0.6, ls="--", alpha=0.5, label="convex envelope")
+        else:
+            ax.add_collection3d(Line3DCollection(segs, colors=_MODEL, linewidths=1.2))
+            ax.plot([], [], [], color=_MODEL, lw=1.2, label="polyhedron")
         extent.append(np.asarray(poly.vertices, dtype=float))
+    if solid is not None:
+        segs = _block_edges(solid)
+        ax.add_collection3d(Line3DCollection(segs, colors=_MODEL, linewidths=1.0))
+        ax.plot([], [], [], color=_MODEL, lw=1.0, label="layer model")
+        extent.append(np.vstack(segs))
     if grasp is not None and grasp.best is not None:
         p = np.asarray(grasp.best.points, dtype=float)
         n = np.asarray(grasp.best.normals, dtype=float)
@@ -208,7 +224,19 @@ def _draw_3d(
     ax.legend(loc="upper left", fontsize=6, frameon=False)
 
 
-def _draw_layers(ax: Any, model: ObjectModel) -> None:
+def _block_edges(solid: SectionSolid) -> list[np.ndarray[Any, np.dtype[np.float64]]]:
+    """The edges of the extruded layer contours: bottom and top rings and vertical edges."""
+    segs = []
+    for block in solid.blocks:
+        ring = np.asarray(block.polygon, dtype=float)
+        nxt = np.roll(ring, -1, axis=0)
+        for z in (block.z0, block.z1):
+            segs += [np.array([[*a, z], [*b, z]]) for a, b in zip(ring, nxt, strict=True)]
+        segs += [np.array([[*a, block.z0], [*a, block.z1]]) for a in ring]
+    return segs
+
+
+def _draw_layers(ax: Any, model: ObjectModel, grasp: GraspPlan | None = None) -> None:
     layers = [lay for lay in model.layers if len(lay.contour) >= 3]
     colours = Normalize(0, max(len(layers) - 1, 1))
     from matplotlib import colormaps
@@ -231,6 +259,11 @@ def _draw_layers(ax: Any, model: ObjectModel) -> None:
         if rec_layer.path:
             p = np.asarray(rec_layer.path, dtype=np.float64)
             ax.plot(p[:, 0], p[:, 1], color="0.7", lw=0.5)
+    if grasp is not None and grasp.best is not None:
+        p = np.asarray(grasp.best.points, dtype=float)
+        ax.plot(p[:, 0], p[:, 1], color=_GRASP, lw=1.5, ls="--", marker="o", ms=4, label="grasp")
+    if grasp is not None and grasp.com is not None:
+        ax.plot([grasp.com[0]], [grasp.com[1]], "kx", ms=5, label="centre of mass")
     ax.set_aspect("equal", adjustable="datalim")
     ax.set_title("layer contours", fontsize=8)
     ax.set_xlabel("x (m)", fontsize=7)
@@ -290,22 +323,27 @@ def plot_exploration(
         model.polyhedron is None or not model.convex
     )
     if layered:
-        grid = fig.add_gridspec(1, 2, width_ratios=(1.35, 1.0), wspace=0.4)
+        grid = fig.add_gridspec(1, 2, width_ratios=(1.35, 1.0), wspace=0.4, top=0.8)
         ax3 = fig.add_subplot(grid[0, 0], projection="3d")
         ax2 = fig.add_subplot(grid[0, 1])
-        _draw_layers(ax2, model)
+        _draw_layers(ax2, model, plan)
     else:
         ax3 = fig.add_subplot(1, 1, 1, projection="3d")
     _draw_3d(ax3, record, model, mesh, plan, fig, layered)
     if title is None:
-        faces = len(model.polyhedron.faces) if model.polyhedron is not None else 0
-        title = f"{record.object or 'object'}: {record.touches} touches, {faces} faces"
+        if model.polyhedron is None and model.layers:
+            found = f"{len(model.layers)} layers"
+        else:
+            found = f"{len(model.polyhedron.faces) if model.polyhedron is not None else 0} faces"
+        title = f"{record.object or 'object'}: {record.touches} touches, {found}"
         if plan is not None:
             title += (
                 f"\ngrasp {plan.best.width * 1000:.0f} mm, ε = {plan.best.quality:.3f}"
                 if plan.best is not None
                 else f"\nno grasp: {plan.reason}"
             )
+            if plan.best is not None and plan.basis == "sections":
+                title += " (on the layer contours)"
     fig.suptitle(_wrap(title, size[0]), fontsize=8)
     if path is not None:
         save_figure(fig, path)

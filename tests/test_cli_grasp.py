@@ -10,7 +10,7 @@ import pytest
 from PIL import Image
 
 from tactile_kb.cli import main
-from tactile_kb.solids import box, tetrahedron
+from tactile_kb.solids import box, tetrahedron, u_shape
 
 KEYS = {
     "object",
@@ -29,7 +29,11 @@ KEYS = {
 @pytest.fixture
 def meshes(tmp_path: Path) -> dict[str, Path]:
     out = {}
-    for name, mesh in (("box", box(0.10, 0.06, 0.04)), ("tetra", tetrahedron(0.1))):
+    for name, mesh in (
+        ("box", box(0.10, 0.06, 0.04)),
+        ("tetra", tetrahedron(0.1)),
+        ("u", u_shape(0.12, 0.08, 0.03, 0.04)),
+    ):
         path = tmp_path / f"{name}.stl"
         mesh.export(path)
         out[name] = path
@@ -134,3 +138,24 @@ def test_unreadable_object_and_record_exit_1(
     err = capsys.readouterr().err.strip()
     assert "bad.json" in err
     assert len(err.splitlines()) == 1
+
+
+def test_grasp_a_box_union_with_the_four_sensor_finger(
+    meshes: dict[str, Path], tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    out = tmp_path / "u.png"
+    args = ["grasp", str(meshes["u"]), "--finger", "4", "--json", "--plot", str(out), "--dpi", "40"]
+    assert main(args) == 0
+    row = json.loads(capsys.readouterr().out)
+    assert set(row) >= KEYS
+    assert row["basis"] == "sections"
+    assert "not touched" in row["notes"][0]
+    assert row["force_closure"] is True
+    # across the base of the U (3 cm), on the line through its centre of mass (x = 0)
+    assert row["width"] == pytest.approx(0.03, abs=1e-4)
+    assert [p[0] for p in row["points"]] == pytest.approx([0.0, 0.0], abs=1e-4)
+    assert _size(out) == (256, 192)
+    assert main(["grasp", str(meshes["u"]), "--finger", "4"]) == 0
+    line = capsys.readouterr().out.strip()
+    assert "of the layer contour" in line
+    assert "top not touched" in line

@@ -98,6 +98,40 @@ def test_layers_panel_for_box_unions(tmp_path: Path) -> None:
     _drawn(tmp_path / "l.png", (360, 180))
 
 
+def test_box_union_grasp_is_drawn_on_the_layer_model(tmp_path: Path) -> None:
+    mesh = l_shape(0.12, 0.08, 0.04, 0.04)
+    record = get_explorer("stepper").explore(mesh, finger="4", seed=0)
+    plan = plan_grasp(record)
+    assert plan.best is not None
+    fig = plot_exploration(record, tmp_path / "l.png", mesh=mesh, grasp=plan, dpi=60)
+    assert "on the layer contours" in fig.texts[0].get_text()
+    (ax3,) = [ax for ax in fig.axes if ax.name == "3d"]
+    legend3 = ax3.get_legend()
+    assert legend3 is not None
+    labels = [t.get_text() for t in legend3.get_texts()]
+    assert "layer model" in labels
+    assert "grasp" in labels
+    contour_ax = next(ax for ax in fig.axes if ax.get_title() == "layer contours")
+    drawn = {line.get_label(): line for line in contour_ax.get_lines()}
+    # the grasp seen from above joins the two grasp points
+    xy = np.asarray(drawn["grasp"].get_xydata(), dtype=float)
+    assert np.allclose(xy, np.asarray(plan.best.points)[:, :2])
+    assert "centre of mass" in drawn
+    _drawn(tmp_path / "l.png", (384, 288))
+
+
+def test_a_non_convex_polyhedron_is_drawn_as_the_convex_envelope() -> None:
+    mesh = l_shape(0.12, 0.08, 0.04, 0.04)
+    record = sample_record(mesh, builtin_finger("33"), quantise=False, noise=0.0)
+    fig = plot_exploration(record, grasp=True)
+    (ax3,) = [ax for ax in fig.axes if ax.name == "3d"]
+    legend3 = ax3.get_legend()
+    assert legend3 is not None
+    labels = [t.get_text() for t in legend3.get_texts()]
+    assert "convex envelope" in labels
+    assert "polyhedron" not in labels
+
+
 class _Result:
     def __init__(self, model: object, decision: object) -> None:
         self.model, self.decision, self.object = model, decision, "box"
@@ -167,3 +201,13 @@ def test_gallery_command_writes_every_picture(tmp_path: Path) -> None:
     for item in gallery_items():
         pixels = _png(tmp_path / item.file)
         assert pixels.std() > 5
+
+
+def test_module_examples() -> None:
+    import doctest
+
+    import tactile_kb.plot
+
+    result = doctest.testmod(tactile_kb.plot, optionflags=doctest.ELLIPSIS)
+    assert result.attempted > 0
+    assert result.failed == 0

@@ -2,7 +2,8 @@
 
 ``tactile-kb grasp PATH... [--json] [--plot FILE]`` explores each object (or loads a saved
 record with ``--record``) and plans a two-finger grasp on parallel faces in line with the centre
-of mass; exit 1 when an object cannot be explored or has no grasp (the reason is printed).
+of mass (on the layer contours for objects made of boxes, e.g. with ``--finger 4``); exit 1 when
+an object cannot be explored or has no grasp (the reason is printed).
 ``tactile-kb plot RECORD.json --out FILE.png`` draws a saved exploration;
 ``tactile-kb tree RULES --out FILE.png [--bits 101101111]`` draws a rule file's choice tree.
 """
@@ -134,10 +135,16 @@ def _line(plan: Any) -> str:
     if b is None:
         return f"{plan.object}- NO GRASP: {plan.reason}"
     force = "cannot hold" if b.least_force is None else f"{b.least_force:.2f} N"
+    where = f"faces {b.faces[0]} and {b.faces[1]}"
+    tail = ""
+    if plan.solid is not None:
+        where = f"sides {b.faces[0]} and {b.faces[1]} of the layer contour"
+        top = "touched top" if plan.solid.top_touched else "top not touched"
+        tail = f" [layer model {plan.solid.height * 1000:.1f} mm high, {top}]"
     return (
-        f"{plan.object}- GRASP faces {b.faces[0]} and {b.faces[1]}: opening {b.width * 1000:.1f} mm, "
+        f"{plan.object}- GRASP {where}: opening {b.width * 1000:.1f} mm, "
         f"planes {b.angle_deg:.1f}° apart, {b.com_offset * 1000:.1f} mm from the centre of mass, "
-        f"ε = {b.quality:.3f}, least force {force}"
+        f"ε = {b.quality:.3f}, least force {force}{tail}"
     )
 
 
