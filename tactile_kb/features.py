@@ -141,9 +141,22 @@ def _uncertainty(model: ObjectModel) -> FloatArray:
 
 def _tolerance(model: ObjectModel, tolerance_deg: float, sigmas: float) -> FloatArray:
     """(F, F) angle tolerances: the larger of ``tolerance_deg`` and the combined uncertainty."""
-    u = _uncertainty(model)
-    comb = np.sqrt(u[:, None] ** 2 + u[None, :] ** 2)
-    return np.asarray(np.maximum(tolerance_deg, sigmas * comb), dtype=float)
+
+    def compute() -> FloatArray:
+        u = _uncertainty(model)
+        comb = np.sqrt(u[:, None] ** 2 + u[None, :] ** 2)
+        return np.asarray(np.maximum(tolerance_deg, sigmas * comb), dtype=float)
+
+    return model.derived((__name__, "tolerance", tolerance_deg, sigmas), compute)
+
+
+def _face_angles(model: ObjectModel) -> FloatArray:
+    def compute() -> FloatArray:
+        p = _poly(model, "face_angles")
+        c = np.clip(p.normals @ p.normals.T, -1.0, 1.0)
+        return np.asarray(np.degrees(np.arccos(c)), dtype=float)
+
+    return model.derived((__name__, "face_angles"), compute)
 
 
 def face_angles(model: ObjectModel) -> FloatArray:
@@ -152,61 +165,122 @@ def face_angles(model: ObjectModel) -> FloatArray:
     0 for the same direction, 180 for parallel faces on opposite sides, 90 for
     perpendicular ones.
     """
-    p = _poly(model, "face_angles")
-    c = np.clip(p.normals @ p.normals.T, -1.0, 1.0)
-    return np.asarray(np.degrees(np.arccos(c)), dtype=float)
+    return _face_angles(model).copy()
+
+
+def _parallelism(model: ObjectModel, tolerance_deg: float, sigmas: float) -> NDArray[np.bool_]:
+    def compute() -> NDArray[np.bool_]:
+        ang = _face_angles(model)
+        return np.asarray(180.0 - ang <= _tolerance(model, tolerance_deg, sigmas), dtype=bool)
+
+    return model.derived((__name__, "parallel", tolerance_deg, sigmas), compute)
+
+
+def _perpendicularity(model: ObjectModel, tolerance_deg: float, sigmas: float) -> NDArray[np.bool_]:
+    def compute() -> NDArray[np.bool_]:
+        ang = _face_angles(model)
+        return np.asarray(
+            np.abs(ang - 90.0) <= _tolerance(model, tolerance_deg, sigmas), dtype=bool
+        )
+
+    return model.derived((__name__, "perpendicular", tolerance_deg, sigmas), compute)
 
 
 def parallelism_table(
     model: ObjectModel, *, tolerance_deg: float = TOLERANCE_DEG, sigmas: float = SIGMAS
 ) -> NDArray[np.bool_]:
     """(F, F) True where two faces are parallel (opposite normals within the tolerance)."""
-    ang = face_angles(model)
-    return np.asarray(180.0 - ang <= _tolerance(model, tolerance_deg, sigmas), dtype=bool)
+    return _parallelism(model, tolerance_deg, sigmas).copy()
 
 
 def perpendicularity_table(
     model: ObjectModel, *, tolerance_deg: float = TOLERANCE_DEG, sigmas: float = SIGMAS
 ) -> NDArray[np.bool_]:
     """(F, F) True where two faces are perpendicular within the tolerance."""
-    ang = face_angles(model)
-    return np.asarray(np.abs(ang - 90.0) <= _tolerance(model, tolerance_deg, sigmas), dtype=bool)
+    return _perpendicularity(model, tolerance_deg, sigmas).copy()
 
 
 def _base_top(p: Polyhedron, horizontal_deg: float) -> tuple[set[int], set[int]]:
     c = math.cos(math.radians(horizontal_deg))
-    base = {i for i in range(len(p.faces)) if p.normals[i, 2] <= -c}
-    top = {i for i in range(len(p.faces)) if p.normals[i, 2] >= c}
+    z = p.normals[:, 2]
+    base = {int(i) for i in np.flatnonzero(z <= -c)}
+    top = {int(i) for i in np.flatnonzero(z >= c)}
     return base, top
+
+
+def _caps(model: ObjectModel, name: str, horizontal_deg: float) -> tuple[set[int], set[int]]:
+    """The base and top faces of the polyhedron (raises if the model is open)."""
+    p = _poly(model, name)
+    return model.derived((__name__, "caps", horizontal_deg), lambda: _base_top(p, horizontal_deg))
+
+
+def _sides(model: ObjectModel, name: str, horizontal_deg: float) -> list[int]:
+    """The lateral faces: neither base nor top."""
+    p = _poly(model, name)
+    base, top = _caps(model, name, horizontal_deg)
+    return [f for f in range(len(p.faces)) if f not in base and f not in top]
+
+
+@dataclass(frozen=True)
+class _Lateral:
+    edges: list[tuple[int, int]]
+    points: FloatArray  # (k, 3) first vertex of each lateral edge
+    directions: FloatArray  # (k, 3) unit direction of each lateral edge
+
+
+def _lateral(model: ObjectModel, name: str, horizontal_deg: float) -> _Lateral:
+    p = _poly(model, name)
+
+    def compute() -> _Lateral:
+        base, top = _caps(model, name, horizontal_deg)
+        cap = base | top
+        edges = [
+            e
+            for e, (f, g) in zip(p.edges, p.edge_faces, strict=True)
+            if f not in cap and g not in cap
+        ]
+        e = np.asarray(edges, dtype=int).reshape(-1, 2)
+        a = p.vertices[e[:, 0]]
+        d = p.vertices[e[:, 1]] - a
+        d = d / np.linalg.norm(d, axis=1)[:, None]
+        return _Lateral(edges, a, d)
+
+    return model.derived((__name__, "lateral", horizontal_deg), compute)
 
 
 def lateral_edges(
     model: ObjectModel, *, horizontal_deg: float = HORIZONTAL_DEG
 ) -> list[tuple[int, int]]:
     """Edges (vertex index pairs) on neither the base nor a top face."""
-    p = _poly(model, "lateral_edges")
-    base, top = _base_top(p, horizontal_deg)
-    cap = base | top
-    return [
-        e for e, (f, g) in zip(p.edges, p.edge_faces, strict=True) if f not in cap and g not in cap
-    ]
+    return list(_lateral(model, "lateral_edges", horizontal_deg).edges)
 
 
 def side_count(model: ObjectModel, *, horizontal_deg: float = HORIZONTAL_DEG) -> int:
     """Number of lateral faces (neither base nor top): n of an n-gonal prism, pyramid, frustum."""
-    p = _poly(model, "side_count")
-    base, top = _base_top(p, horizontal_deg)
-    return len(p.faces) - len(base | top)
+    return len(_sides(model, "side_count", horizontal_deg))
 
 
 def _lateral_lines(model: ObjectModel, horizontal_deg: float) -> tuple[FloatArray, FloatArray]:
-    p = _poly(model, "lateral edges")
-    edges = lateral_edges(model, horizontal_deg=horizontal_deg)
-    e = np.asarray(edges, dtype=int).reshape(-1, 2)
-    a = p.vertices[e[:, 0]]
-    d = p.vertices[e[:, 1]] - a
-    d = d / np.linalg.norm(d, axis=1)[:, None]
-    return a, d
+    lat = _lateral(model, "lateral edges", horizontal_deg)
+    return lat.points, lat.directions
+
+
+def _common_point(model: ObjectModel, horizontal_deg: float) -> tuple[FloatArray, float] | None:
+    def compute() -> tuple[FloatArray, float] | None:
+        a, d = _lateral_lines(model, horizontal_deg)
+        if len(a) < 2:
+            return None
+        proj = np.eye(3)[None, :, :] - d[:, :, None] * d[:, None, :]
+        m = proj.sum(axis=0)
+        sv = np.linalg.svd(m, compute_uv=False)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            if not sv[0] / sv[-1] <= 1e6:  # the condition number (inf/nan: singular)
+                return None
+        point = np.linalg.solve(m, np.einsum("kij,kj->i", proj, a))
+        miss = np.einsum("kij,kj->ki", proj, point[None, :] - a)
+        return point, float(np.sqrt((miss**2).sum(axis=1).mean()))
+
+    return model.derived((__name__, "common_point", horizontal_deg), compute)
 
 
 def lateral_common_point(
@@ -217,16 +291,13 @@ def lateral_common_point(
     ``p = (Σ(I − ddᵀ))⁻¹ Σ(I − ddᵀ)a``; None when there are fewer than two lateral edges or
     the lines are (nearly) parallel, so that no finite point is determined.
     """
-    a, d = _lateral_lines(model, horizontal_deg)
-    if len(a) < 2:
-        return None
-    proj = np.eye(3)[None, :, :] - d[:, :, None] * d[:, None, :]
-    m = proj.sum(axis=0)
-    if np.linalg.cond(m) > 1e6:
-        return None
-    point = np.linalg.solve(m, np.einsum("kij,kj->i", proj, a))
-    miss = np.einsum("kij,kj->ki", proj, point[None, :] - a)
-    return point, float(np.sqrt((miss**2).sum(axis=1).mean()))
+    found = _common_point(model, horizontal_deg)
+    return None if found is None else (found[0].copy(), found[1])
+
+
+def _diameter(model: ObjectModel, name: str) -> float:
+    p = _poly(model, name)
+    return model.derived((__name__, "diameter"), lambda: p.diameter)
 
 
 def section_at(model: ObjectModel, z: float) -> FloatArray:
@@ -256,10 +327,20 @@ def surface_curved(
     p = model.polyhedron
     if p is None:
         return False
-    ef = np.asarray(p.edge_faces, dtype=int).reshape(-1, 2)
-    cos = np.einsum("ij,ij->i", p.normals[ef[:, 0]], p.normals[ef[:, 1]])
-    smooth = int((cos > math.cos(math.radians(smooth_deg))).sum())
+    smooth = int((_edge_cosines(model, p) > math.cos(math.radians(smooth_deg))).sum())
     return smooth >= min_smooth_edges
+
+
+def _edge_cosines(model: ObjectModel, p: Polyhedron) -> FloatArray:
+    """(E,) cosine of the angle between the normals of the two faces at each edge."""
+
+    def compute() -> FloatArray:
+        ef = np.asarray(p.edge_faces, dtype=int).reshape(-1, 2)
+        return np.asarray(
+            np.einsum("ij,ij->i", p.normals[ef[:, 0]], p.normals[ef[:, 1]]), dtype=float
+        )
+
+    return model.derived((__name__, "edge_cosines"), compute)
 
 
 def surface_plane(
@@ -286,10 +367,19 @@ def lateral_edges_parallel(
     _, d = _lateral_lines(model, horizontal_deg)
     if len(d) < min_edges:
         return False
-    _, vecs = np.linalg.eigh(d.T @ d)
-    axis = vecs[:, -1]
-    worst = float(np.degrees(np.arccos(np.clip(np.abs(d @ axis).min(), -1.0, 1.0))))
-    return worst <= tolerance_deg
+    return _lateral_spread_deg(model, horizontal_deg) <= tolerance_deg
+
+
+def _lateral_spread_deg(model: ObjectModel, horizontal_deg: float) -> float:
+    """Largest angle (degrees) between a lateral edge and the edges' mean axis."""
+
+    def compute() -> float:
+        _, d = _lateral_lines(model, horizontal_deg)
+        _, vecs = np.linalg.eigh(d.T @ d)
+        axis = vecs[:, -1]
+        return float(np.degrees(np.arccos(np.clip(np.abs(d @ axis).min(), -1.0, 1.0))))
+
+    return model.derived((__name__, "lateral_spread", horizontal_deg), compute)
 
 
 def lateral_edges_concurrent(
@@ -307,10 +397,10 @@ def lateral_edges_concurrent(
         model, tolerance_deg=tolerance_deg, horizontal_deg=horizontal_deg, min_edges=min_edges
     ):
         return False
-    found = lateral_common_point(model, horizontal_deg=horizontal_deg)
+    found = _common_point(model, horizontal_deg)
     if found is None:
         return False
-    return found[1] <= point_tol * _poly(model, "lateral_edges_concurrent").diameter
+    return found[1] <= point_tol * _diameter(model, "lateral_edges_concurrent")
 
 
 def face_count(
@@ -334,7 +424,7 @@ def parallel_face_pairs(
     sigmas: float = SIGMAS,
 ) -> bool:
     """Exactly ``count`` (or at least ``min``) pairs of parallel faces exist."""
-    table = parallelism_table(model, tolerance_deg=tolerance_deg, sigmas=sigmas)
+    table = _parallelism(model, tolerance_deg, sigmas)
     pairs = int(np.triu(table, 1).sum())
     if min is not None:
         return pairs >= min
@@ -346,24 +436,41 @@ def adjacent_faces_perpendicular(
 ) -> bool:
     """Every two faces that share an edge are perpendicular."""
     p = _poly(model, "adjacent_faces_perpendicular")
-    table = perpendicularity_table(model, tolerance_deg=tolerance_deg, sigmas=sigmas)
-    return all(bool(table[f, g]) for f, g in p.edge_faces)
+    table = _perpendicularity(model, tolerance_deg, sigmas)
+    ef = np.asarray(p.edge_faces, dtype=int).reshape(-1, 2)
+    return bool(table[ef[:, 0], ef[:, 1]].all())
 
 
 def equal_edges(model: ObjectModel, *, rel_tol: float = REL_TOL) -> bool:
     """Distances between neighbouring vertices are equal: (max − min) / mean ≤ ``rel_tol``."""
-    lengths = _poly(model, "equal_edges").edge_lengths()
+    p = _poly(model, "equal_edges")
+    lengths = model.derived((__name__, "edge_lengths"), p.edge_lengths)
     return bool((lengths.max() - lengths.min()) / lengths.mean() <= rel_tol)
 
 
-def _face_signature(p: Polyhedron, f: int) -> tuple[FloatArray, FloatArray]:
-    v = p.vertices[list(p.faces[f])]
-    nxt = np.roll(v, -1, axis=0)
-    prv = np.roll(v, 1, axis=0)
-    lengths = np.linalg.norm(nxt - v, axis=1)
+def _congruence(p: Polyhedron) -> tuple[bool, float, float, float]:
+    """How far the faces are from congruent with the first: ``(same number of sides, largest
+    difference of a sorted side length, largest difference of a sorted corner angle in
+    degrees, mean side length)``."""
+    counts = np.asarray([len(f) for f in p.faces], dtype=np.intp)
+    if (counts != counts[0]).any():
+        return False, math.inf, math.inf, 0.0
+    c = int(counts[0])
+    v = p.vertices[np.asarray(p.faces, dtype=np.intp)]  # (F, c, 3): faces' corners in order
+    nxt = np.roll(v, -1, axis=1)
+    prv = np.roll(v, 1, axis=1)
     a, b = nxt - v, prv - v
-    cos = np.einsum("ij,ij->i", a, b) / (np.linalg.norm(a, axis=1) * np.linalg.norm(b, axis=1))
-    return np.sort(lengths), np.sort(np.degrees(np.arccos(np.clip(cos, -1.0, 1.0))))
+    lengths = np.linalg.norm(a, axis=2)
+    cos = np.einsum("fij,fij->fi", a, b) / (lengths * np.linalg.norm(b, axis=2))
+    angles = np.degrees(np.arccos(np.clip(cos, -1.0, 1.0)))
+    lengths.sort(axis=1)
+    angles.sort(axis=1)
+    scale = float(np.mean(lengths.mean(axis=1)))
+    if len(counts) < 2 or c == 0:
+        return True, 0.0, 0.0, scale
+    dl = float(np.abs(lengths[1:] - lengths[0]).max())
+    da = float(np.abs(angles[1:] - angles[0]).max())
+    return True, dl, da, scale
 
 
 def congruent_faces(
@@ -371,31 +478,20 @@ def congruent_faces(
 ) -> bool:
     """All faces are congruent: same number of sides, side lengths and angles."""
     p = _poly(model, "congruent_faces")
-    sigs = [_face_signature(p, f) for f in range(len(p.faces))]
-    l0, a0 = sigs[0]
-    scale = float(np.mean([s[0].mean() for s in sigs]))
-    for lengths, angles in sigs[1:]:
-        if len(lengths) != len(l0):
-            return False
-        if (
-            np.abs(lengths - l0).max() > rel_tol * scale
-            or np.abs(angles - a0).max() > tolerance_deg
-        ):
-            return False
-    return True
+    same, dl, da, scale = model.derived((__name__, "congruence"), lambda: _congruence(p))
+    return same and not (dl > rel_tol * scale or da > tolerance_deg)
 
 
 def top_face(model: ObjectModel, *, horizontal_deg: float = HORIZONTAL_DEG) -> bool:
     """A top face parallel to the base (the table) exists."""
-    _, top = _base_top(_poly(model, "top_face"), horizontal_deg)
+    _, top = _caps(model, "top_face", horizontal_deg)
     return bool(top)
 
 
 def lateral_faces_triangles(model: ObjectModel, *, horizontal_deg: float = HORIZONTAL_DEG) -> bool:
     """Every lateral face (neither base nor top) is a triangle."""
     p = _poly(model, "lateral_faces_triangles")
-    base, top = _base_top(p, horizontal_deg)
-    sides = [f for f in range(len(p.faces)) if f not in base | top]
+    sides = _sides(model, "lateral_faces_triangles", horizontal_deg)
     return bool(sides) and all(len(p.faces[f]) == 3 for f in sides)
 
 
@@ -407,8 +503,7 @@ def lateral_faces_vertical(
 ) -> bool:
     """Every lateral face is vertical (its normal horizontal within ``tolerance_deg``)."""
     p = _poly(model, "lateral_faces_vertical")
-    base, top = _base_top(p, horizontal_deg)
-    sides = [f for f in range(len(p.faces)) if f not in base | top]
+    sides = _sides(model, "lateral_faces_vertical", horizontal_deg)
     s = math.sin(math.radians(tolerance_deg))
     return bool(sides) and all(abs(p.normals[f, 2]) <= s for f in sides)
 

@@ -29,18 +29,21 @@ Examples
 
 from __future__ import annotations
 
+from collections.abc import Callable, Hashable
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, TypeVar, cast
 
 import numpy as np
 
 from tactile_kb.errors import GeometryError, OpenModelError, UsageError
-from tactile_kb.planes import DEFAULT_SPLIT_TOL, Face, merge_planes
+from tactile_kb.planes import DEFAULT_SPLIT_TOL, Face, contact_arrays, merge_plane_arrays
 from tactile_kb.polyhedron import DEFAULT_MERGE_FRACTION, Polyhedron, polyhedron_from_planes
 from tactile_kb.record import ExplorationRecord
 from tactile_kb.sections import LayerSection, distinct_planes, layer_sections
 
 __all__ = ["ObjectModel", "build_model"]
+
+T = TypeVar("T")
 
 
 @dataclass(frozen=True, eq=False)
@@ -74,6 +77,32 @@ class ObjectModel:
     options: dict[str, Any] = field(default_factory=dict)
     face_of: tuple[int, ...] = ()
     """For each polyhedron face, the index of its :class:`Face` in ``faces``."""
+    _derived: dict[Hashable, Any] = field(
+        default_factory=dict, init=False, repr=False, compare=False
+    )
+
+    def derived(self, key: Hashable, compute: Callable[[], T]) -> T:
+        """``compute()``, evaluated once per model and ``key``: a value derived from the model.
+
+        The model is immutable, so feature extractors share what they derive from it (face
+        angles, lateral edges, …) instead of computing it again for every proposition. The key
+        must name everything the value depends on besides the model (e.g. a tolerance), and
+        begin with the caller's module name, so that two modules never share a key.
+
+        Examples
+        --------
+        >>> from tactile_kb.record import ExplorationRecord
+        >>> model = build_model(ExplorationRecord())
+        >>> model.derived((__name__, "answer"), lambda: 42)
+        42
+        >>> model.derived((__name__, "answer"), lambda: 0)  # computed once per model
+        42
+        """
+        try:
+            return cast(T, self._derived[key])
+        except KeyError:
+            value = self._derived[key] = compute()
+            return value
 
     @property
     def convex(self) -> bool:
@@ -133,19 +162,26 @@ def build_model(
     """
     if not isinstance(record, ExplorationRecord):
         raise UsageError(f"build_model needs an ExplorationRecord, got {type(record).__name__}")
-    faces = merge_planes(record, cut_deg=cut_deg, split_tol=split_tol, include_table=include_table)
+    arrays = contact_arrays(record.contacts)
+    faces = merge_plane_arrays(
+        record,
+        arrays,
+        range(len(record.contacts)),
+        cut_deg=cut_deg,
+        split_tol=split_tol,
+        include_table=include_table,
+    )
     noise = float(record.params.get("noise", 0.0))
     tol = (
         support_tol if support_tol is not None else max(split_tol or DEFAULT_SPLIT_TOL, 6.0 * noise)
     )
-    points = _surface_points(record, faces)
-    supporting = []
-    for f in faces:
-        if len(points) == 0:
-            supporting.append(True)
-            continue
-        outside = points @ f.normal_array - f.offset
-        supporting.append(bool(outside.max() <= tol))
+    points = _surface_points(arrays[0], record.tip_radius, faces)
+    normals = np.asarray([f.normal for f in faces], dtype=float).reshape(-1, 3)
+    offsets = np.asarray([f.offset for f in faces], dtype=float)
+    if len(points):
+        supporting = [bool(s) for s in (points @ normals.T - offsets).max(axis=0) <= tol]
+    else:
+        supporting = [True] * len(faces)
     options = {
         "cut_deg": cut_deg,
         "split_tol": split_tol,
@@ -155,11 +191,11 @@ def build_model(
         "open_factor": open_factor,
     }
     layers = layer_sections(record)
-    keep = [f for f, s in zip(faces, supporting, strict=True) if s]
+    kept = [i for i, s in enumerate(supporting) if s]
     try:
         poly = polyhedron_from_planes(
-            np.asarray([f.normal for f in keep], dtype=float).reshape(-1, 3),
-            np.asarray([f.offset for f in keep], dtype=float),
+            normals[kept],
+            offsets[kept],
             merge_fraction=merge_fraction,
             bound=_bound(points, open_factor),
             interior=points.mean(axis=0) if len(points) >= 4 else None,
@@ -170,7 +206,6 @@ def build_model(
         )
     except GeometryError as exc:
         return ObjectModel(record, faces, None, tuple(supporting), str(exc), [], layers, options)
-    kept = [i for i, s in enumerate(supporting) if s]
     face_of = tuple(kept[p] for p in poly.plane_index)
     return ObjectModel(record, faces, poly, tuple(supporting), "", [], layers, options, face_of)
 
@@ -186,10 +221,8 @@ def _bound(
 
 
 def _surface_points(
-    record: ExplorationRecord, faces: tuple[Face, ...]
+    centres: np.ndarray[Any, np.dtype[np.float64]], rho: float, faces: tuple[Face, ...]
 ) -> np.ndarray[Any, np.dtype[np.float64]]:
     """Each contact's point on the object: its tip centre moved ρ along −(its face's normal)."""
-    rho = record.tip_radius
-    centres = np.asarray([c.centre for c in record.contacts], dtype=float).reshape(-1, 3)
     parts = [centres[list(f.contacts)] - rho * f.normal_array for f in faces if f.contacts]
     return np.vstack(parts) if parts else np.zeros((0, 3))

@@ -36,8 +36,11 @@ Examples
 
 from __future__ import annotations
 
+import functools
+import itertools
 import math
-from collections.abc import Sequence
+import operator
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -54,8 +57,10 @@ __all__ = [
     "DEFAULT_SPLIT_TOL",
     "TABLE_TOL",
     "Face",
+    "contact_arrays",
     "cut_angle",
     "fit_face",
+    "merge_plane_arrays",
     "merge_planes",
 ]
 
@@ -152,7 +157,7 @@ class _Fit:
 
 def _fit(centres: FloatArray, sensor_normals: FloatArray, span_min: float) -> _Fit:
     mean_n = sensor_normals.mean(axis=0)
-    mean_n /= np.linalg.norm(mean_n)
+    mean_n /= math.sqrt(float(mean_n @ mean_n))
     mean_c = centres.mean(axis=0)
     m = len(centres)
     if m >= 3:
@@ -194,16 +199,34 @@ def _sse(f: _Fit) -> float:
     return float((f.residuals**2).sum())
 
 
+FitFn = Callable[[NDArray[np.intp]], _Fit]
+
+
+def _fitter(centres: FloatArray, normals: FloatArray, span_min: float) -> FitFn:
+    """``_fit`` of a group of contact indices, computed once per group (keyed by its indices)."""
+    cache: dict[bytes, _Fit] = {}
+
+    def fit(idx: NDArray[np.intp]) -> _Fit:
+        key = idx.tobytes()
+        found = cache.get(key)
+        if found is None:
+            found = cache[key] = _fit(centres[idx], normals[idx], span_min)
+        return found
+
+    return fit
+
+
 def _split(
     idx: NDArray[np.intp],
     centres: FloatArray,
     normals: FloatArray,
     span_min: float,
     tol: float,
+    fit: FitFn,
     depth: int = 0,
 ) -> list[NDArray[np.intp]]:
     """Recursively split ``idx`` until each part's centres fit one plane within ``tol``."""
-    f = _fit(centres[idx], normals[idx], span_min)
+    f = fit(idx)
     if f.max_res <= tol or len(idx) < 2 or depth > 8:
         return [idx]
     best: tuple[float, NDArray[np.bool_]] | None = None
@@ -218,16 +241,16 @@ def _split(
         mask = _kplanes(idx, mask, centres, normals, span_min)
         if mask.all() or not mask.any():
             continue
-        a = _fit(centres[idx[mask]], normals[idx[mask]], span_min)
-        b = _fit(centres[idx[~mask]], normals[idx[~mask]], span_min)
+        a = fit(idx[mask])
+        b = fit(idx[~mask])
         score = _sse(a) + _sse(b)
         if best is None or score < best[0]:
             best = (score, mask)
     if best is None or best[0] >= 0.5 * _sse(f):
         return [idx]
     mask = best[1]
-    return _split(idx[mask], centres, normals, span_min, tol, depth + 1) + _split(
-        idx[~mask], centres, normals, span_min, tol, depth + 1
+    return _split(idx[mask], centres, normals, span_min, tol, fit, depth + 1) + _split(
+        idx[~mask], centres, normals, span_min, tol, fit, depth + 1
     )
 
 
@@ -255,24 +278,51 @@ def _kplanes(
     return mask
 
 
+def _unique_rows(a: FloatArray) -> tuple[FloatArray, NDArray[np.intp]]:
+    """``np.unique(a, axis=0, return_inverse=True)`` for (m, 3) floats, without its slow
+    structured-dtype sort: rows in lexicographic order and each input row's index among them."""
+    order = np.lexsort((a[:, 2], a[:, 1], a[:, 0]))
+    s = a[order]
+    first = np.ones(len(s), dtype=bool)
+    first[1:] = (s[1:] != s[:-1]).any(axis=1)
+    inverse = np.empty(len(a), dtype=np.intp)
+    inverse[order] = np.cumsum(first) - 1
+    return s[first], inverse
+
+
 def _normal_clusters(normals: FloatArray, cut_deg: float) -> NDArray[np.intp]:
     """Cluster labels (0-based) of unit normals: average linkage on distinct directions."""
     if len(normals) == 1:
         return np.zeros(1, dtype=np.intp)
-    uniq, inverse = np.unique(np.round(normals, 9), axis=0, return_inverse=True)
+    uniq, inverse = _unique_rows(np.round(normals, 9))
     if len(uniq) == 1:
         return np.zeros(len(normals), dtype=np.intp)
     uniq = uniq / np.linalg.norm(uniq, axis=1)[:, None]
     z = linkage(uniq, method="average", metric="cosine")
     labels = fcluster(z, t=1.0 - math.cos(math.radians(cut_deg)), criterion="distance") - 1
-    return np.asarray(labels[np.asarray(inverse).reshape(-1)], dtype=np.intp)
+    return np.asarray(labels[inverse], dtype=np.intp)
 
 
-def _is_quantised(contacts: Sequence[Contact], sensors: FloatArray) -> bool:
+def _is_quantised(directions: FloatArray, sensors: FloatArray) -> bool:
     if len(sensors) == 0:
         return False
-    d = np.asarray([c.direction for c in contacts], dtype=float)
-    return bool(((d @ sensors.T).max(axis=1) > 1.0 - 1e-9).all())
+    return bool(((directions @ sensors.T).max(axis=1) > 1.0 - 1e-9).all())
+
+
+def contact_arrays(contacts: Sequence[Contact]) -> tuple[FloatArray, FloatArray, FloatArray]:
+    """The contacts' tip centres, sensor directions r0 and points r1 as three (m, 3) arrays.
+
+    Reading the attributes of hundreds of (pydantic) contacts is the slowest single step of
+    modelling a record, so :func:`tactile_kb.model.build_model` does it once and hands the
+    arrays to :func:`merge_plane_arrays`.
+    """
+    return _column(contacts, "centre"), _column(contacts, "direction"), _column(contacts, "point")
+
+
+def _column(contacts: Sequence[Contact], name: str) -> FloatArray:
+    m = len(contacts)
+    flat = itertools.chain.from_iterable(map(operator.attrgetter(name), contacts))
+    return np.fromiter(flat, dtype=float, count=3 * m).reshape(m, 3)
 
 
 def merge_planes(
@@ -310,20 +360,79 @@ def merge_planes(
     tuple of Face
         Faces from contacts (ordered by their first contact), then the table.
     """
+    chosen: Sequence[int]
+    if contacts is None:
+        chosen = range(len(record.contacts))
+        arrays = contact_arrays(record.contacts)
+    else:
+        chosen = list(contacts)
+        arrays = contact_arrays([record.contacts[i] for i in chosen])
+    return merge_plane_arrays(
+        record,
+        arrays,
+        chosen,
+        cut_deg=cut_deg,
+        split_tol=split_tol,
+        span_min=span_min,
+        merge_deg=merge_deg,
+        include_table=include_table,
+    )
+
+
+def merge_plane_arrays(
+    record: ExplorationRecord,
+    arrays: tuple[FloatArray, FloatArray, FloatArray],
+    chosen: Sequence[int],
+    *,
+    cut_deg: float | None = None,
+    split_tol: float | None = None,
+    span_min: float = DEFAULT_SPAN,
+    merge_deg: float = DEFAULT_MERGE_DEG,
+    include_table: bool = True,
+) -> tuple[Face, ...]:
+    """:func:`merge_planes` of contacts already read into arrays by :func:`contact_arrays`.
+
+    Parameters
+    ----------
+    record
+        Gives the finger's tip radius, its sensor directions and the declared noise.
+    arrays
+        ``(centres, directions, points)``, each (m, 3), of the contacts ``chosen``.
+    chosen
+        The m indices into ``record.contacts`` of those contacts (the faces report them).
+    cut_deg, split_tol, span_min, merge_deg, include_table
+        As for :func:`merge_planes`.
+
+    Returns
+    -------
+    tuple of Face
+        Faces from contacts (ordered by their first contact), then the table.
+    """
+    if any(np.shape(a) != (len(chosen), 3) for a in arrays):
+        shapes = ", ".join(str(np.shape(a)) for a in arrays)
+        raise UsageError(f"arrays must be three ({len(chosen)}, 3) arrays, got {shapes}")
     for name, value in (("merge_deg", merge_deg), ("span_min", span_min)):
         if not value >= 0:
             raise UsageError(f"{name} must be ≥ 0, got {value}")
-    sensors = np.asarray(record.sensor_directions, dtype=float).reshape(-1, 3)
-    cut = cut_angle(sensors) if cut_deg is None else float(cut_deg)
+    sensors, spacing_cut, cone = _finger(tuple(record.sensor_directions))
+    cut = spacing_cut if cut_deg is None else float(cut_deg)
     if not 0.0 < cut < 90.0:
         raise UsageError(f"cut_deg must lie in (0, 90), got {cut_deg}")
     noise = float(record.params.get("noise", 0.0))
     tol = split_tol if split_tol is not None else max(DEFAULT_SPLIT_TOL, 6.0 * noise)
-    chosen = list(range(len(record.contacts))) if contacts is None else list(contacts)
-    picked = [record.contacts[i] for i in chosen]
     faces: list[Face] = []
-    if picked:
-        faces = _faces_from_contacts(record, picked, chosen, sensors, cut, tol, span_min, merge_deg)
+    if len(chosen):
+        quantised = _is_quantised(arrays[1], sensors)
+        faces = _faces_from_contacts(
+            record.tip_radius,
+            arrays,
+            chosen,
+            cut,
+            tol,
+            span_min,
+            merge_deg,
+            cone if quantised else 0.0,
+        )
     if include_table and not any(
         f.normal[2] < -math.cos(math.radians(merge_deg)) and abs(f.offset) <= tol for f in faces
     ):
@@ -332,20 +441,19 @@ def merge_planes(
 
 
 def _faces_from_contacts(
-    record: ExplorationRecord,
-    picked: list[Contact],
-    chosen: list[int],
-    sensors: FloatArray,
+    tip_radius: float,
+    arrays: tuple[FloatArray, FloatArray, FloatArray],
+    chosen: Sequence[int],
     cut: float,
     tol: float,
     span_min: float,
     merge_deg: float,
+    cone: float,
 ) -> list[Face]:
-    centres = np.asarray([c.centre for c in picked], dtype=float)
-    points = np.asarray([c.point for c in picked], dtype=float)
-    normals = -np.asarray([c.direction for c in picked], dtype=float)
+    centres, directions, points = arrays
+    normals = -directions
     normals /= np.linalg.norm(normals, axis=1)[:, None]
-    rho = record.tip_radius
+    rho = tip_radius
     if rho <= 0:
         rho = float(np.median(np.linalg.norm(points - centres, axis=1)))
     # contacts on the table top are not the object
@@ -355,20 +463,24 @@ def _faces_from_contacts(
     keep = np.flatnonzero(~table)
     if len(keep) == 0:
         return []
+    fit = _fitter(centres, normals, span_min)
     labels = _normal_clusters(normals[keep], cut)
     groups: list[NDArray[np.intp]] = []
     for lab in np.unique(labels):
-        groups += _split(keep[labels == lab], centres, normals, span_min, tol)
-    groups = _merge_coplanar(groups, centres, normals, span_min, tol, merge_deg)
+        groups += _split(keep[labels == lab], centres, normals, span_min, tol, fit)
+    groups = _merge_coplanar(groups, fit, tol, merge_deg)
     groups.sort(key=lambda g: int(g.min()))
-    quantised = _is_quantised(picked, sensors)
-    cone = _cone_deg(sensors) if quantised else 0.0
+    index = (
+        np.arange(chosen.start, chosen.stop, chosen.step)
+        if isinstance(chosen, range)
+        else np.asarray(chosen)
+    )
     out = []
     for g in groups:
-        f = _fit(centres[g], normals[g], span_min)
+        f = fit(g)
         m = len(g)
         if f.refined:
-            sigma = math.sqrt(float((f.residuals**2).sum()) / max(m - 3, 1))
+            sigma = math.sqrt(_sse(f) / max(m - 3, 1))
             unc = math.degrees(math.atan2(sigma, f.span * math.sqrt(m)))
         else:
             spread = float(np.degrees(np.arccos(np.clip(normals[g] @ f.normal, -1, 1))).max())
@@ -382,41 +494,43 @@ def _faces_from_contacts(
                 n_contacts=m,
                 residual=rms,
                 normal_uncertainty_deg=unc,
-                contacts=tuple(chosen[int(i)] for i in sorted(g)),
+                contacts=tuple(index[np.sort(g)].tolist()),
                 refined=f.refined,
             )
         )
     return out
 
 
-def _cone_deg(sensors: FloatArray) -> float:
-    """Half the median neighbour spacing of the sensors: the worst quantisation, degrees."""
-    return cut_angle(sensors) / 0.6 / 2.0 if len(sensors) >= 2 else DEFAULT_CUT_DEG
+@functools.lru_cache(maxsize=8)
+def _finger(directions: tuple[Vec3, ...]) -> tuple[FloatArray, float, float]:
+    """A finger layout's sensor directions as a read-only (k, 3) array, its clustering cut
+    (:func:`cut_angle`) and its worst quantisation (half the median neighbour spacing),
+    degrees: computed once per layout."""
+    sensors = np.asarray(directions, dtype=float).reshape(-1, 3)
+    sensors.setflags(write=False)
+    cut = cut_angle(sensors)
+    cone = cut / 0.6 / 2.0 if len(sensors) >= 2 else DEFAULT_CUT_DEG
+    return sensors, cut, cone
 
 
 def _merge_coplanar(
-    groups: list[NDArray[np.intp]],
-    centres: FloatArray,
-    normals: FloatArray,
-    span_min: float,
-    tol: float,
-    merge_deg: float,
+    groups: list[NDArray[np.intp]], fit: FitFn, tol: float, merge_deg: float
 ) -> list[NDArray[np.intp]]:
     """Merge groups whose fitted planes coincide (normals within ``merge_deg``, one plane fits)."""
     cos_min = math.cos(math.radians(merge_deg))
     changed = True
     while changed and len(groups) > 1:
         changed = False
-        fits = [_fit(centres[g], normals[g], span_min) for g in groups]
-        for i in range(len(groups)):
-            for j in range(i + 1, len(groups)):
-                if fits[i].normal @ fits[j].normal < cos_min:
-                    continue
-                both = np.concatenate([groups[i], groups[j]])
-                if _fit(centres[both], normals[both], span_min).max_res <= tol:
-                    groups = [g for k, g in enumerate(groups) if k not in (i, j)] + [both]
-                    changed = True
-                    break
-            if changed:
+        fits = [fit(g) for g in groups]
+        normals = np.asarray([f.normal for f in fits])
+        # candidate pairs (i < j, row by row) from one matrix product, each confirmed below
+        near = np.triu(normals @ normals.T >= cos_min - 1e-9, 1)
+        for i, j in zip(*np.nonzero(near), strict=True):
+            if fits[i].normal @ fits[j].normal < cos_min:
+                continue
+            both = np.concatenate([groups[i], groups[j]])
+            if fit(both).max_res <= tol:
+                groups = [g for k, g in enumerate(groups) if k not in (i, j)] + [both]
+                changed = True
                 break
     return groups

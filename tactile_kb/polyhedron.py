@@ -27,15 +27,15 @@ Examples
 
 from __future__ import annotations
 
+import functools
+import itertools
 import math
 from dataclasses import dataclass, field
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy.optimize import linprog
-from scipy.sparse import csr_matrix
-from scipy.sparse.csgraph import connected_components
-from scipy.spatial import HalfspaceIntersection, QhullError
+from scipy.spatial import ConvexHull, HalfspaceIntersection, QhullError
 
 from tactile_kb.errors import GeometryError, OpenModelError, UsageError
 
@@ -158,27 +158,25 @@ def open_directions(normals: ArrayLike, *, tol: float = 1e-9) -> list[tuple[floa
             (0.0, 0.0, -1.0),
         ]
     n = n / np.linalg.norm(n, axis=1)[:, None]
-    candidates: list[FloatArray] = []
+    if len(n) >= _HULL_TEST and _surrounds_origin(n, 1e3 * max(tol, 1e-9)):
+        return []
     # line space of the cone: null space of the normals, both senses
-    _, s, vt = np.linalg.svd(n)
-    rank = int((s > 1e-9).sum())
-    for row in vt[rank:]:
-        candidates += [row, -row]
-    i, j = np.triu_indices(len(n), 1)
-    cross = np.cross(n[i], n[j])
+    rank = int((np.linalg.svd(n, compute_uv=False) > 1e-9).sum())
+    null = np.linalg.svd(n)[2][rank:] if rank < 3 else np.zeros((0, 3))
+    i, j = _pairs(len(n))
+    cross = _cross(n[i], n[j])
     length = np.linalg.norm(cross, axis=1)
     good = length > 1e-9
     cross = cross[good] / length[good][:, None]
-    # only the rays inside the cone can be open directions: test them all at once
-    both = np.vstack([cross, -cross])
-    inside = both[(both @ n.T <= tol).all(axis=1)] if len(both) else both
-    candidates += list(inside)
-    # when the cone is a half-space or wedge with one bounding plane, its rays include
-    # directions inside single planes; the axes cover the remaining generic cases
-    candidates += [np.array(v, dtype=float) for v in np.vstack([np.eye(3), -np.eye(3)])]
+    # the rays of the cone are among ± the pairwise cross products; when the cone is a
+    # half-space or wedge with one bounding plane, its rays include directions inside single
+    # planes: the axes cover the remaining generic cases
+    candidates = np.vstack(
+        [np.stack([null, -null], axis=1).reshape(-1, 3), cross, -cross, np.eye(3), -np.eye(3)]
+    )
     out: list[FloatArray] = []
-    for c in candidates:
-        if (n @ c <= tol).all() and not any(float(c @ o) > 1.0 - 1e-6 for o in out):
+    for c in candidates[(candidates @ n.T <= tol).all(axis=1)]:
+        if not any(float(c @ o) > 1.0 - 1e-6 for o in out):
             out.append(c)
     if not out:
         return []
@@ -187,6 +185,21 @@ def open_directions(normals: ArrayLike, *, tol: float = 1e-9) -> list[tuple[floa
         (round(float(x), 6) + 0.0, round(float(y), 6) + 0.0, round(float(z), 6) + 0.0)
         for x, y, z in out
     ]
+
+
+_HULL_TEST = 12
+"""From this many normals on, :func:`open_directions` first tries the convex-hull test."""
+
+
+def _surrounds_origin(n: FloatArray, margin: float) -> bool:
+    """True when the convex hull of the unit normals ``n`` holds the ball of radius ``margin``
+    about the origin: then every unit direction ``c`` has ``max(n · c) ≥ margin``, so no
+    direction is open (a quick answer for many planes; False means "not sure")."""
+    try:
+        hull = ConvexHull(n)
+    except QhullError:  # flat or degenerate set of normals: let the exact test decide
+        return False
+    return bool((hull.equations[:, 3] < -margin).all())
 
 
 def _fmt(d: tuple[float, float, float]) -> str:
@@ -236,28 +249,95 @@ def _chebyshev(n: FloatArray, d: FloatArray) -> tuple[FloatArray, float]:
     return np.asarray(res.x[:3], dtype=float), float(res.x[3])
 
 
+def _cross(a: FloatArray, b: FloatArray) -> FloatArray:
+    """Row-wise cross products of (k, 3) arrays (``np.cross`` without its overhead)."""
+    out = np.empty(np.broadcast_shapes(a.shape, b.shape))
+    out[..., 0] = a[..., 1] * b[..., 2] - a[..., 2] * b[..., 1]
+    out[..., 1] = a[..., 2] * b[..., 0] - a[..., 0] * b[..., 2]
+    out[..., 2] = a[..., 0] * b[..., 1] - a[..., 1] * b[..., 0]
+    return out
+
+
+@functools.lru_cache(maxsize=16)
+def _pairs(m: int) -> tuple[NDArray[np.intp], NDArray[np.intp]]:
+    """``np.triu_indices(m, 1)``, read-only and computed once per ``m``."""
+    i, j = np.triu_indices(m, 1)
+    i.setflags(write=False)
+    j.setflags(write=False)
+    return i, j
+
+
+def _components(close: NDArray[np.bool_]) -> NDArray[np.intp]:
+    """Connected-component labels of a symmetric adjacency matrix, numbered in the order of
+    each component's smallest member (as ``scipy.sparse.csgraph.connected_components``)."""
+    pairs = np.nonzero(np.triu(close, 1))
+    if len(pairs[0]) == 0:  # every vertex on its own
+        return np.arange(len(close), dtype=np.intp)
+    parent = list(range(len(close)))
+
+    def root(a: int) -> int:
+        while parent[a] != a:
+            parent[a] = parent[parent[a]]
+            a = parent[a]
+        return a
+
+    for a, b in zip(*pairs, strict=True):
+        ra, rb = root(int(a)), root(int(b))
+        if ra != rb:  # the smaller index stays the root
+            parent[max(ra, rb)] = min(ra, rb)
+    roots = np.asarray([root(a) for a in range(len(close))], dtype=np.intp)
+    _, labels = np.unique(roots, return_inverse=True)
+    return np.asarray(labels, dtype=np.intp).reshape(-1)
+
+
+def _cluster_vertices(
+    raw: FloatArray,
+    labels: NDArray[np.intp],
+    k: int,
+    active: NDArray[np.bool_],
+    n: FloatArray,
+    d: FloatArray,
+    max_shift: float,
+) -> FloatArray:
+    """One vertex per cluster of raw vertices: the least-squares point of the planes active
+    there (at least three, well conditioned), else — or if that point lies more than
+    ``max_shift`` from the cluster — the cluster's mean."""
+    sums = np.zeros((k, 3))
+    np.add.at(sums, labels, raw)
+    means = sums / np.bincount(labels, minlength=k)[:, None]
+    verts = means.copy()
+    rows, cols = np.nonzero(active)  # the planes active at each vertex, in order
+    bounds = np.searchsorted(rows, np.arange(k + 1)).tolist()
+    planes = [cols[i:j] for i, j in itertools.pairwise(bounds)]
+    solvable = [v for v in range(k) if len(planes[v]) >= 3]
+    if solvable:
+        mats = np.stack([n[planes[v]].T @ n[planes[v]] for v in solvable])
+        rhs = np.stack([n[planes[v]].T @ d[planes[v]] for v in solvable])
+        sv = np.linalg.svd(mats, compute_uv=False)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            good = sv[:, 0] / sv[:, -1] < 1e8  # the condition number (inf/nan: singular)
+        if good.any():
+            which = np.asarray(solvable)[good]
+            verts[which] = np.linalg.solve(mats[good], rhs[good][:, :, None])[:, :, 0]
+    far = np.linalg.norm(verts - means, axis=1) > max_shift
+    verts[far] = means[far]
+    return verts
+
+
 def _order_polygon(points: FloatArray, normal: FloatArray) -> list[int]:
     """Indices ordering ``points`` counter-clockwise seen from the side ``normal`` points to."""
     centre = points.mean(axis=0)
     u = points[0] - centre
-    if np.linalg.norm(u) < 1e-15:
-        u = np.cross(normal, [1.0, 0.0, 0.0])
-        if np.linalg.norm(u) < 1e-9:
-            u = np.cross(normal, [0.0, 1.0, 0.0])
+    if math.sqrt(u @ u) < 1e-15:
+        u = _cross(normal, np.array([1.0, 0.0, 0.0]))
+        if math.sqrt(u @ u) < 1e-9:
+            u = _cross(normal, np.array([0.0, 1.0, 0.0]))
     u = u - normal * (u @ normal)
-    u /= np.linalg.norm(u)
-    v = np.cross(normal, u)
+    u /= math.sqrt(u @ u)
+    v = _cross(normal, u)
     rel = points - centre
     ang = np.arctan2(rel @ v, rel @ u)
     return [int(i) for i in np.argsort(ang, kind="stable")]
-
-
-def _least_squares_point(n: FloatArray, d: FloatArray, fallback: FloatArray) -> FloatArray:
-    if len(n) >= 3:
-        a = n.T @ n
-        if np.linalg.cond(a) < 1e8:
-            return np.asarray(np.linalg.solve(a, n.T @ d), dtype=float)
-    return fallback
 
 
 def polyhedron_from_planes(
@@ -328,58 +408,48 @@ def polyhedron_from_planes(
                 f"{names} (explore that side)",
                 far,
             )
-    active_raw = [{int(i) for i in f} for f in hs.dual_facets]
     # tolerance: the exact activity of every plane at every raw vertex, by distance
     diam = float(np.ptp(raw, axis=0).max()) if len(raw) else 0.0
     merge_tol = tol if tol is not None else merge_fraction * diam
     eps = max(1e-9 * diam, 1e-12)
     if len(raw) > 1 and merge_tol > 0:  # single linkage: connected components of close pairs
         close = np.linalg.norm(raw[:, None, :] - raw[None, :, :], axis=2) <= merge_tol
-        _, labels = connected_components(csr_matrix(close), directed=False)
+        labels = _components(close)
     else:
         labels = np.arange(len(raw))
     k = int(labels.max()) + 1 if len(raw) else 0
-    active: list[set[int]] = [set() for _ in range(k)]
-    near = np.abs(raw @ n.T - d[None, :]) <= eps
-    for i, lab in enumerate(labels):
-        active[lab] |= active_raw[i]
-        active[lab] |= {int(j) for j in np.flatnonzero(near[i])}
-    verts = np.zeros((k, 3))
-    for lab in range(k):
-        members = raw[labels == lab]
-        act = sorted(active[lab])
-        verts[lab] = _least_squares_point(n[act], d[act], members.mean(axis=0))
-        if np.linalg.norm(verts[lab] - members.mean(axis=0)) > 2 * merge_tol + eps:
-            verts[lab] = members.mean(axis=0)
+    # active[v, p]: plane p passes through vertex v (Qhull's facet, or within eps of a member)
+    hit = np.abs(raw @ n.T - d[None, :]) <= eps
+    facets = hs.dual_facets
+    sizes = [len(f) for f in facets]
+    flat = np.fromiter(itertools.chain.from_iterable(facets), dtype=np.intp, count=sum(sizes))
+    hit[np.repeat(np.arange(len(facets)), sizes), flat] = True
+    active = np.zeros((k, len(n)), dtype=bool)
+    np.logical_or.at(active, labels, hit)
+    verts = _cluster_vertices(raw, labels, k, active, n, d, 2 * merge_tol + eps)
     # faces: planes active at ≥ 3 distinct vertices
-    on_plane: dict[int, list[int]] = {}
-    for v, planes in enumerate(active):
-        for p in planes:
-            on_plane.setdefault(p, []).append(v)
-    face_planes = sorted(p for p, vs in on_plane.items() if len(vs) >= 3)
+    kept = active.sum(axis=0) >= 3
     # keep only vertices that lie on ≥ 3 kept faces (a vertex on two is inside an edge)
-    kept = set(face_planes)
-    corner = {v for v, planes in enumerate(active) if len(planes & kept) >= 3}
-    for p in face_planes:
-        on_plane[p] = [v for v in on_plane[p] if v in corner]
-    face_planes = [p for p in face_planes if len(on_plane[p]) >= 3]
-    # (near-)duplicate planes carry the same vertex set: one face each
-    seen: set[frozenset[int]] = set()
+    corner = (active & kept[None, :]).sum(axis=1) >= 3
+    on_face = active & corner[:, None] & kept[None, :]
+    face_planes = [int(p) for p in np.flatnonzero(on_face.sum(axis=0) >= 3)]
+    # (near-)duplicate planes carry the same vertex set: one face each, the first plane's
+    seen: set[bytes] = set()
     unique = []
     for p in face_planes:
-        key = frozenset(on_plane[p])
+        key = np.packbits(on_face[:, p]).tobytes()
         if key not in seen:
             seen.add(key)
             unique.append(p)
     face_planes = unique
-    used = sorted({v for p in face_planes for v in on_plane[p]})
-    remap = {v: i for i, v in enumerate(used)}
+    used = np.flatnonzero(on_face[:, face_planes].any(axis=1))
+    remap = np.full(k, -1, dtype=np.intp)
+    remap[used] = np.arange(len(used))
     vertices = verts[used]
     faces: list[tuple[int, ...]] = []
-    for p in face_planes:
-        idx = [remap[v] for v in on_plane[p]]
-        order = _order_polygon(vertices[idx], n[p])
-        faces.append(tuple(idx[o] for o in order))
+    for p, row in zip(face_planes, on_face[:, face_planes].T, strict=True):
+        idx = remap[np.flatnonzero(row)]
+        faces.append(tuple(idx[_order_polygon(vertices[idx], n[p])].tolist()))
     return _assemble(vertices, faces, n[face_planes], d[face_planes], tuple(face_planes))
 
 
@@ -418,7 +488,7 @@ def _assemble(
         dtype=int,
     )
     a0, a1, a2 = vertices[tri[:, 0]], vertices[tri[:, 1]], vertices[tri[:, 2]]
-    tri_area = 0.5 * np.einsum("ij,ij->i", np.cross(a1 - a0, a2 - a0), normals[tri_face])
+    tri_area = 0.5 * np.einsum("ij,ij->i", _cross(a1 - a0, a2 - a0), normals[tri_face])
     tri_centre = (a0 + a1 + a2) / 3.0
     areas = np.asarray(np.bincount(tri_face, weights=tri_area, minlength=f_), dtype=float)
     fcent = (
@@ -432,7 +502,7 @@ def _assemble(
         / np.where(areas > 0, areas, 1.0)[:, None]
     )
     ref = vertices.mean(axis=0)
-    tet = np.einsum("ij,ij->i", a0 - ref, np.cross(a1 - ref, a2 - ref)) / 6.0
+    tet = np.einsum("ij,ij->i", a0 - ref, _cross(a1 - ref, a2 - ref)) / 6.0
     vol = float(tet.sum())
     mom = (tet[:, None] * (ref + a0 + a1 + a2) / 4.0).sum(axis=0)
     if vol <= 0:

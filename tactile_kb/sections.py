@@ -66,19 +66,23 @@ def cross_section(poly: Polyhedron, z: float) -> FloatArray:
     """The polygon (k, 2), counter-clockwise seen from above, where the plane at height ``z``
     cuts ``poly``; empty (0, 2) when the plane misses it."""
     v = poly.vertices
-    pts = []
-    for a, b in poly.edges:
-        za, zb = v[a, 2] - z, v[b, 2] - z
-        if za == 0.0:
-            pts.append(v[a, :2])
-        if zb == 0.0:
-            pts.append(v[b, :2])
-        if za * zb < 0:
-            t = za / (za - zb)
-            pts.append(v[a, :2] + t * (v[b, :2] - v[a, :2]))
+    e = np.asarray(poly.edges, dtype=np.intp).reshape(-1, 2)
+    va, vb = v[e[:, 0]], v[e[:, 1]]
+    za, zb = va[:, 2] - z, vb[:, 2] - z
+    cut = za * zb < 0
+    t = za[cut] / (za[cut] - zb[cut])
+    pts = np.concatenate(
+        [
+            va[za == 0.0, :2],
+            vb[zb == 0.0, :2],
+            va[cut, :2] + t[:, None] * (vb[cut, :2] - va[cut, :2]),
+        ]
+    )
     if len(pts) < 3:
         return np.zeros((0, 2))
-    p = np.unique(np.round(np.asarray(pts), 12), axis=0)
+    r = np.round(pts, 12)
+    r = r[np.lexsort((r[:, 1], r[:, 0]))]  # np.unique(r, axis=0), without its overhead
+    p = r[np.concatenate([[True], (r[1:] != r[:-1]).any(axis=1)])]
     if len(p) < 3:
         return np.zeros((0, 2))
     c = p.mean(axis=0)

@@ -51,3 +51,26 @@ def test_non_convex_object_keeps_its_convex_envelope_and_layers() -> None:
     layered = build_model(sample_layers(mesh, builtin_finger("4"), [0.01, 0.03]))
     assert len(layered.layers) == 2
     assert len(layered.distinct_planes()) == 6
+
+
+def test_derived_values_are_computed_once_per_model() -> None:
+    import dataclasses
+
+    from tactile_kb.finger import builtin_finger
+    from tactile_kb.model import build_model
+    from tactile_kb.solids import box
+    from tactile_kb.synthetic import sample_record
+
+    model = build_model(sample_record(box(0.08, 0.08, 0.08), builtin_finger("33"), seed=1))
+    calls: list[int] = []
+
+    def compute() -> int:
+        calls.append(1)
+        return 42
+
+    assert model.derived(("test", "x"), compute) == 42
+    assert model.derived(("test", "x"), compute) == 42
+    assert len(calls) == 1
+    fresh = dataclasses.replace(model)
+    assert fresh.derived(("test", "x"), compute) == 42
+    assert len(calls) == 2

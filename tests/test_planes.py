@@ -88,3 +88,17 @@ def test_table_contacts_are_ignored_and_bad_options_raise() -> None:
     assert [f.source for f in faces] == ["table"]
     with pytest.raises(UsageError, match="cut_deg"):
         merge_planes(rec, cut_deg=100)
+
+
+def test_merge_plane_arrays_equals_merge_planes() -> None:
+    from tactile_kb.errors import UsageError
+    from tactile_kb.finger import builtin_finger
+    from tactile_kb.planes import contact_arrays, merge_plane_arrays, merge_planes
+    from tactile_kb.solids import box
+    from tactile_kb.synthetic import sample_record
+
+    rec = sample_record(box(0.1, 0.06, 0.04), builtin_finger("33"), noise=0.0005, seed=4)
+    arrays = contact_arrays(rec.contacts)
+    assert merge_plane_arrays(rec, arrays, range(len(rec.contacts))) == merge_planes(rec)
+    with pytest.raises(UsageError):
+        merge_plane_arrays(rec, arrays, range(len(rec.contacts) - 1))
