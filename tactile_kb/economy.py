@@ -44,7 +44,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from tactile_kb.engine import ternary_closure
-from tactile_kb.expr import fold, names
+from tactile_kb.expr import evaluate_columns, names
 
 if TYPE_CHECKING:
     from tactile_kb.compiler import Group, KnowledgeBase, Node
@@ -237,18 +237,7 @@ def optimal_ternary(kb: KnowledgeBase) -> float:
     cols = {v: ((ints >> (m - 1 - i)) & 1).astype(bool) for i, v in enumerate(names)}
 
     def evaluate(expr: Any) -> np.ndarray[Any, Any]:
-        out = fold(
-            expr,
-            var=cols.__getitem__,
-            const=lambda v: np.full(size, v, dtype=bool),
-            not_=np.logical_not,
-            and_=np.logical_and,
-            or_=np.logical_or,
-            implies=lambda a, b: np.logical_or(np.logical_not(a), b),
-            equiv=np.equal,
-            xor=np.logical_xor,
-        )
-        return np.broadcast_to(out, (size,))
+        return evaluate_columns(expr, cols, size)
 
     ok = np.ones(size, dtype=bool)
     for g in groups:

@@ -40,7 +40,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from tactile_kb.errors import UsageError
-from tactile_kb.expr import Expr, fold, names
+from tactile_kb.expr import evaluate_columns, names
 from tactile_kb.notation import Cube, cube_text
 
 if TYPE_CHECKING:
@@ -147,20 +147,6 @@ def ternary_closure(values: np.ndarray[Any, Any], n: int, op: Any) -> np.ndarray
     return a.reshape(-1)
 
 
-def _numpy_eval(expr: Expr, cols: Mapping[str, Any], size: int) -> Any:
-    return fold(
-        expr,
-        var=lambda name: cols[name],
-        const=lambda v: np.full(size, v, dtype=bool),
-        not_=np.logical_not,
-        and_=np.logical_and,
-        or_=np.logical_or,
-        implies=lambda a, b: np.logical_or(np.logical_not(a), b),
-        equiv=np.equal,
-        xor=np.logical_xor,
-    )
-
-
 class Engine:
     """Classification over a compiled :class:`~tactile_kb.compiler.KnowledgeBase`.
 
@@ -214,7 +200,7 @@ class Engine:
         self._answer_sets = ternary_closure(masks, self.n, np.bitwise_or).tolist()
         self._satisfiable = [
             ternary_closure(
-                np.broadcast_to(_numpy_eval(c.expr, cols, size), (size,)).astype(np.uint8),
+                evaluate_columns(c.expr, cols, size).astype(np.uint8),
                 self.n,
                 np.bitwise_or,
             ).tobytes()
@@ -553,10 +539,10 @@ class Engine:
         rules = self.kb.rules
         ok = np.ones(size, dtype=bool)
         for c in rules.connections:
-            ok &= _numpy_eval(c.expr, cols, size)
+            ok &= evaluate_columns(c.expr, cols, size)
         out = np.full(size, self.K, dtype=np.int16)
         for i in range(self.K - 1, -1, -1):  # the first class in file order wins
-            hit = _numpy_eval(rules.classes[i].expr, cols, size)
+            hit = evaluate_columns(rules.classes[i].expr, cols, size)
             out[hit] = i
         out[~ok] = -1
         return out

@@ -37,6 +37,8 @@ from collections.abc import Callable, Iterator, Mapping
 from dataclasses import dataclass, field
 from typing import Any, TypeVar
 
+import numpy as np
+
 from tactile_kb.errors import ExpressionError, UsageError
 
 __all__ = [
@@ -52,6 +54,7 @@ __all__ = [
     "Var",
     "Xor",
     "evaluate",
+    "evaluate_columns",
     "fold",
     "is_identifier",
     "names",
@@ -462,6 +465,30 @@ def variables(expr: Expr) -> Iterator[Var]:
 def names(expr: Expr) -> frozenset[str]:
     """The ids ``expr`` mentions."""
     return frozenset(v.name for v in variables(expr))
+
+
+def evaluate_columns(expr: Expr, columns: Mapping[str, Any], size: int) -> np.ndarray[Any, Any]:
+    """``expr`` over many assignments at once: ``columns[id]`` is a boolean array of ``size``.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> a, b = np.array([0, 0, 1, 1], bool), np.array([0, 1, 0, 1], bool)
+    >>> evaluate_columns(parse_expr("A -> B"), {"A": a, "B": b}, 4).tolist()
+    [True, True, False, True]
+    """
+    out = fold(
+        expr,
+        var=lambda name: columns[name],
+        const=lambda v: np.full(size, v, dtype=bool),
+        not_=np.logical_not,
+        and_=np.logical_and,
+        or_=np.logical_or,
+        implies=lambda a, b: np.logical_or(np.logical_not(a), b),
+        equiv=np.equal,
+        xor=np.logical_xor,
+    )
+    return np.broadcast_to(out, (size,))
 
 
 def evaluate(expr: Expr, values: Mapping[str, bool]) -> bool:

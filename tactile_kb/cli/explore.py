@@ -4,11 +4,11 @@ from __future__ import annotations
 
 import argparse
 import json
-import math
 import sys
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+from tactile_kb.cli.options import add_exploration_options
 from tactile_kb.errors import TactileKBError, UsageError
 
 if TYPE_CHECKING:
@@ -18,31 +18,6 @@ if TYPE_CHECKING:
 # `tactile-kb --help` and the rule-file commands start quickly.
 
 __all__ = ["register"]
-
-
-def _sigma(text: str) -> float:
-    try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"not a number of metres: {text!r}") from None
-    if not math.isfinite(value) or value < 0:
-        raise argparse.ArgumentTypeError(f"must be a finite number ≥ 0, got {text!r}")
-    return value
-
-
-def _exploration_options(p: argparse.ArgumentParser) -> None:
-    p.add_argument("--explorer", default="stepper", help="explorer plugin (default: stepper)")
-    p.add_argument(
-        "--finger", default="33", help="finger layout: 4, 33 or a YAML file (default: 33)"
-    )
-    p.add_argument(
-        "--noise",
-        type=_sigma,
-        default=0.0,
-        metavar="SIGMA_METRES",
-        help="σ of the contact-position noise, metres (default: 0)",
-    )
-    p.add_argument("--seed", type=int, default=0, help="seed for noise and drop-outs (default: 0)")
 
 
 def register(sub: argparse._SubParsersAction[Any]) -> None:
@@ -61,7 +36,7 @@ def register(sub: argparse._SubParsersAction[Any]) -> None:
         default="parallelepipeds",
         help="rule set name or YAML file (default: parallelepipeds)",
     )
-    _exploration_options(p)
+    add_exploration_options(p)
     p.add_argument("--json", action="store_true", help="one JSON object per line and per object")
     p.add_argument("--plot", metavar="FILE", help="draw what the finger found (PNG or SVG)")
     p.set_defaults(func=_classify)
@@ -69,7 +44,7 @@ def register(sub: argparse._SubParsersAction[Any]) -> None:
     p = sub.add_parser("explore", help="explore one object and save the record")
     p.add_argument("path", metavar="PATH")
     p.add_argument("--out", required=True, metavar="RECORD.json")
-    _exploration_options(p)
+    add_exploration_options(p)
     p.set_defaults(func=_explore)
 
     p = sub.add_parser("demo", help="the paper's Fig. 5: twelve objects explored and named")

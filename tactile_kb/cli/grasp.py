@@ -17,19 +17,10 @@ import sys
 from pathlib import Path
 from typing import Any
 
+from tactile_kb.cli.options import add_exploration_options, nonnegative
 from tactile_kb.errors import TactileKBError, UsageError
 
 __all__ = ["register"]
-
-
-def _positive(text: str) -> float:
-    try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"not a number: {text!r}") from None
-    if not math.isfinite(value) or value < 0:
-        raise argparse.ArgumentTypeError(f"must be a finite number ≥ 0, got {text!r}")
-    return value
 
 
 def _size(text: str) -> tuple[float, float]:
@@ -53,7 +44,7 @@ def _picture_options(p: argparse.ArgumentParser, default: tuple[float, float]) -
         metavar="WxH",
         help=f"figure size in inches (default: {default[0]}x{default[1]})",
     )
-    p.add_argument("--dpi", type=_positive, default=100.0, help="dots per inch (default: 100)")
+    p.add_argument("--dpi", type=nonnegative, default=100.0, help="dots per inch (default: 100)")
 
 
 def _check_picture(path: str, flag: str) -> None:
@@ -77,27 +68,24 @@ def register(sub: argparse._SubParsersAction[Any]) -> None:
         metavar="RECORD.json",
         help="plan on a saved exploration record instead (repeatable)",
     )
-    p.add_argument("--explorer", default="stepper", help="explorer plugin (default: stepper)")
-    p.add_argument("--finger", default="33", help="finger layout: 4, 33 or a YAML file")
-    p.add_argument("--noise", type=_positive, default=0.0, help="σ of position noise, metres")
-    p.add_argument("--seed", type=int, default=0, help="seed of the exploration (default: 0)")
-    p.add_argument("--mu", type=_positive, default=0.5, help="friction coefficient (default 0.5)")
+    add_exploration_options(p)
+    p.add_argument("--mu", type=nonnegative, default=0.5, help="friction coefficient (default 0.5)")
     p.add_argument(
         "--max-opening",
-        type=_positive,
+        type=nonnegative,
         default=0.15,
         metavar="METRES",
         help="widest jaw opening of the pincers (default: 0.15)",
     )
     p.add_argument(
         "--margin",
-        type=_positive,
+        type=nonnegative,
         default=0.005,
         metavar="METRES",
         help="grasp points at least this far inside their faces (default: 0.005)",
     )
     p.add_argument(
-        "--mass", type=_positive, default=None, help="object mass, kg (default: 1000 kg/m³)"
+        "--mass", type=nonnegative, default=None, help="object mass, kg (default: 1000 kg/m³)"
     )
     p.add_argument("--json", action="store_true", help="one JSON object per line and per object")
     p.add_argument("--plot", metavar="FILE", help="draw each object and its grasp (PNG or SVG)")
