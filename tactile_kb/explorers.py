@@ -189,6 +189,8 @@ class WorldExplorer(abc.ABC):
 
         if noise < 0:
             raise UsageError(f"noise must be ≥ 0 metres, got {noise}")
+        if seed is not None and (not isinstance(seed, int) or seed < 0):
+            raise UsageError(f"seed must be a whole number ≥ 0 or None, got {seed!r}")
         mesh = load_object(obj)
         f = load_finger(finger)
         world = self.make_world(mesh, f, seed=seed, noise=noise)

@@ -98,7 +98,10 @@ def save_figure(fig: Figure, path: str | Path, *, dpi: float | None = None) -> P
         raise UsageError(f"{p}: cannot write a picture with suffix {p.suffix!r} (use {known})")
     if not p.parent.exists():
         raise UsageError(f"{p}: the directory {p.parent} does not exist")
-    fig.savefig(p, format=fmt, dpi=dpi if dpi is not None else fig.dpi)
+    try:
+        fig.savefig(p, format=fmt, dpi=dpi if dpi is not None else fig.dpi)
+    except OSError as exc:
+        raise UsageError(f"{p}: cannot write the picture: {exc.strerror or exc}") from None
     return p
 
 

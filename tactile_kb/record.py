@@ -149,11 +149,24 @@ class ExplorationRecord(BaseModel):
         return rec
 
     def save(self, path: str | Path) -> None:
-        """Write the record to ``path`` atomically (a temporary file, then a rename)."""
+        """Write the record to ``path`` atomically (a temporary file, then a rename).
+
+        Nothing is left half-written: a failure raises :class:`RecordError` naming the path
+        and leaves any earlier file at ``path`` as it was. A path that exists and is not a
+        regular file (a directory, a device) is refused.
+        """
         p = Path(path)
+        if p.exists() and not p.is_file():
+            raise RecordError(f"{p}: not a regular file; give a file name for the record")
+        if not p.name:
+            raise RecordError(f"{path}: give a file name for the record")
         tmp = p.with_name(p.name + ".tmp")
-        tmp.write_text(self.to_json(indent=1), encoding="utf-8")
-        tmp.replace(p)
+        try:
+            tmp.write_text(self.to_json(indent=1), encoding="utf-8")
+            tmp.replace(p)
+        except OSError as exc:
+            tmp.unlink(missing_ok=True)
+            raise RecordError(f"{p}: cannot write: {exc.strerror or exc}") from None
 
     @classmethod
     def load(cls, path: str | Path) -> ExplorationRecord:
@@ -163,4 +176,6 @@ class ExplorationRecord(BaseModel):
             text = p.read_text(encoding="utf-8")
         except OSError as exc:
             raise RecordError(f"{p}: cannot read: {exc.strerror or exc}") from None
+        except UnicodeDecodeError as exc:
+            raise RecordError(f"{p}: not a record (not UTF-8 text: {exc.reason})") from None
         return cls.from_json(text, file=str(p))

@@ -138,3 +138,68 @@ def test_plugins_lists_the_stepper(capsys: pytest.CaptureFixture[str]) -> None:
     out = capsys.readouterr().out
     assert "stepper" in out
     assert "parallel_face_pairs" in out
+
+
+@pytest.mark.parametrize(
+    ("argv", "code", "needle"),
+    [
+        (["classify", "x.stl", "--seed", "-5"], 2, "--seed: must be ≥ 0"),
+        (["classify", "x.stl", "--explorer", "nonesuch"], 2, "unknown explorer 'nonesuch'"),
+        (["classify", "x.stl", "--plot", "/no/such/dir/p.png"], 2, "does not exist"),
+        (["classify", "x.stl", "--plot", "p.gif"], 2, "must end in .png, .svg, .pdf"),
+    ],
+)
+def test_bad_arguments_fail_before_any_exploration(
+    argv: list[str], code: int, needle: str, capsys: pytest.CaptureFixture[str]
+) -> None:
+    assert main(argv) == code
+    captured = capsys.readouterr()
+    assert captured.out == ""
+    assert len(captured.err.strip().splitlines()) == 1
+    assert needle in captured.err
+
+
+def test_explore_refuses_a_directory_or_device_and_leaves_it_alone(
+    meshes: dict[str, Path], tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    import stat
+
+    for out in (str(tmp_path), "/dev/null"):
+        before = Path(out).stat().st_mode
+        assert main(["explore", str(meshes["cube"]), "--out", out]) == 1
+        err = capsys.readouterr().err
+        assert err.strip().endswith("not a regular file; give a file name for the record")
+        assert Path(out).stat().st_mode == before
+    assert stat.S_ISCHR(Path("/dev/null").stat().st_mode)
+
+
+def test_record_that_is_not_text_is_one_line(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    bad = tmp_path / "r.json"
+    bad.write_bytes(b"\xff\xfe\x00garbage")
+    assert main(["classify", "--record", str(bad)]) == 1
+    err = capsys.readouterr().err.strip().splitlines()
+    assert err == [f"tactile-kb: error: {bad}: not a record (not UTF-8 text: invalid start byte)"]
+
+
+def test_pictures_of_objects_with_the_same_name_do_not_overwrite_each_other(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    from tactile_kb.solids import box as make_box
+
+    paths = []
+    for folder in ("a", "b"):
+        (tmp_path / folder).mkdir()
+        paths.append(tmp_path / folder / "x.stl")
+        make_box(0.08, 0.08, 0.08).export(paths[-1])
+    plot = tmp_path / "pp.png"
+    assert main(["classify", *map(str, paths), "--plot", str(plot)]) == 0
+    assert sorted(p.name for p in tmp_path.glob("pp-*.png")) == ["pp-x-2.png", "pp-x.png"]
+
+
+def test_version(capsys: pytest.CaptureFixture[str]) -> None:
+    with pytest.raises(SystemExit) as info:
+        main(["--version"])
+    assert info.value.code == 0
+    assert capsys.readouterr().out.startswith("tactile-kb ")

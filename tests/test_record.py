@@ -98,3 +98,11 @@ def test_unknown_version_rejected() -> None:
 def test_missing_file() -> None:
     with pytest.raises(RecordError, match="cannot read"):
         ExplorationRecord.load("/nonexistent/r.json")
+
+
+def test_save_failure_is_a_record_error_and_leaves_nothing(tmp_path: Path) -> None:
+    with pytest.raises(RecordError, match=r"^/proc/nope\.json: cannot write"):
+        _record().save("/proc/nope.json")
+    assert not Path("/proc/nope.json.tmp").exists()
+    with pytest.raises(RecordError, match="not a regular file"):
+        _record().save(tmp_path)

@@ -15,7 +15,13 @@ import sys
 from collections.abc import Sequence
 from typing import NoReturn
 
-from tactile_kb.errors import SourceError, TactileKBError, UsageError
+from tactile_kb.errors import (
+    PluginError,
+    PluginUnavailableError,
+    SourceError,
+    TactileKBError,
+    UsageError,
+)
 
 __all__ = ["main"]
 
@@ -40,6 +46,9 @@ def build_parser() -> Parser:
         prog="tactile-kb",
         description="Recognise a 3-D object by touch and say why.",
     )
+    from tactile_kb import __version__
+
+    parser.add_argument("--version", action="version", version=f"tactile-kb {__version__}")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=Parser)
     sub.required = True
     for name in COMMAND_MODULES:
@@ -54,7 +63,9 @@ def report(error: TactileKBError) -> int:
             print(problem, file=sys.stderr)
         has_errors = any(p.severity == "error" for p in error.problems)
         return EXIT_FAILED if has_errors else EXIT_OK
-    if isinstance(error, UsageError):
+    if isinstance(error, UsageError) or (
+        isinstance(error, PluginError) and not isinstance(error, PluginUnavailableError)
+    ):  # a bad argument: an unknown name, a value out of range
         print(f"tactile-kb: error: {error}", file=sys.stderr)
         return EXIT_USAGE
     print(f"tactile-kb: error: {error}", file=sys.stderr)

@@ -8,7 +8,12 @@ import sys
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from tactile_kb.cli.options import add_exploration_options
+from tactile_kb.cli.options import (
+    add_exploration_options,
+    check_picture,
+    error_line,
+    picture_paths,
+)
 from tactile_kb.errors import TactileKBError, UsageError
 
 if TYPE_CHECKING:
@@ -58,14 +63,6 @@ def register(sub: argparse._SubParsersAction[Any]) -> None:
     p.set_defaults(func=_plugins)
 
 
-def _plot_path(base: str, index: int, count: int, name: str) -> Path:
-    path = Path(base)
-    if count == 1:
-        return path
-    stem = Path(name).stem or f"object{index}"
-    return path.with_name(f"{path.stem}-{stem}{path.suffix}")
-
-
 def _emit(result: Classification, as_json: bool) -> None:
     if as_json:
         print(json.dumps(result.summary()), flush=True)
@@ -76,8 +73,8 @@ def _emit(result: Classification, as_json: bool) -> None:
 def _classify(args: argparse.Namespace) -> int:
     if not args.paths and not args.record:
         raise UsageError("classify needs at least one PATH or --record RECORD.json")
-    if args.plot and Path(args.plot).suffix.lower() not in (".png", ".svg"):
-        raise UsageError(f"--plot {args.plot}: the file must end in .png or .svg")
+    if args.plot:
+        check_picture(args.plot, "--plot")
     from tactile_kb.explorers import get_explorer
     from tactile_kb.finger import load_finger
     from tactile_kb.pipeline import classify, classify_record, knowledge_base
@@ -87,11 +84,10 @@ def _classify(args: argparse.Namespace) -> int:
     kb = knowledge_base(args.rules)
     explorer = get_explorer(args.explorer) if args.paths else None
     finger = load_finger(args.finger)
-    total = len(args.paths) + len(args.record)
+    items: list[tuple[str, bool]] = [(p, False) for p in args.paths]
+    items += [(r, True) for r in args.record]
+    pictures = picture_paths(args.plot, [item for item, _ in items]) if args.plot else []
     failed = 0
-    items: list[tuple[str, bool]] = [(p, False) for p in args.paths] + [
-        (r, True) for r in args.record
-    ]
     for index, (item, is_record) in enumerate(items):
         try:
             if is_record:
@@ -106,15 +102,19 @@ def _classify(args: argparse.Namespace) -> int:
                     noise=args.noise,
                     seed=args.seed,
                 )
-            if args.plot:
-                from tactile_kb.plot import plot_classification
-
-                plot_classification(result, _plot_path(args.plot, index, total, item))
         except TactileKBError as exc:
             failed += 1
-            print(f"tactile-kb: error: {item}: {exc}", file=sys.stderr, flush=True)
+            print(error_line(item, exc), file=sys.stderr, flush=True)
             continue
-        _emit(result, args.json)
+        _emit(result, args.json)  # the answer is out before any picture is drawn
+        if pictures:
+            from tactile_kb.plot import plot_classification
+
+            try:
+                plot_classification(result, pictures[index])
+            except TactileKBError as exc:
+                failed += 1
+                print(error_line(item, exc), file=sys.stderr, flush=True)
     return 1 if failed else 0
 
 
@@ -150,7 +150,7 @@ def _demo(args: argparse.Namespace) -> int:
             result = classify(mesh, rules=kb, explorer=explorer, finger="33", seed=0)
         except TactileKBError as exc:
             failed += 1
-            print(f"tactile-kb: error: {name}: {exc}", file=sys.stderr, flush=True)
+            print(error_line(name, exc), file=sys.stderr, flush=True)
             continue
         if args.json:
             print(json.dumps({**result.summary(), "object": name}), flush=True)

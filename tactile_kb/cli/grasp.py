@@ -14,10 +14,15 @@ import argparse
 import json
 import math
 import sys
-from pathlib import Path
 from typing import Any
 
-from tactile_kb.cli.options import add_exploration_options, nonnegative
+from tactile_kb.cli.options import (
+    add_exploration_options,
+    check_picture,
+    error_line,
+    nonnegative,
+    picture_paths,
+)
 from tactile_kb.errors import TactileKBError, UsageError
 
 __all__ = ["register"]
@@ -45,16 +50,6 @@ def _picture_options(p: argparse.ArgumentParser, default: tuple[float, float]) -
         help=f"figure size in inches (default: {default[0]}x{default[1]})",
     )
     p.add_argument("--dpi", type=nonnegative, default=100.0, help="dots per inch (default: 100)")
-
-
-def _check_picture(path: str, flag: str) -> None:
-    from tactile_kb.plot import FORMATS
-
-    p = Path(path)
-    if p.suffix.lower() not in FORMATS:
-        raise UsageError(f"{flag} {path}: the file must end in {', '.join(FORMATS)}")
-    if not p.parent.exists():
-        raise UsageError(f"{flag} {path}: directory {str(p.parent)!r} does not exist")
 
 
 def register(sub: argparse._SubParsersAction[Any]) -> None:
@@ -110,14 +105,6 @@ def register(sub: argparse._SubParsersAction[Any]) -> None:
     p.set_defaults(func=_tree)
 
 
-def _plot_path(base: str, index: int, count: int, name: str) -> Path:
-    path = Path(base)
-    if count == 1:
-        return path
-    stem = Path(name).stem or f"object{index}"
-    return path.with_name(f"{path.stem}-{stem}{path.suffix}")
-
-
 def _line(plan: Any) -> str:
     b = plan.best
     if b is None:
@@ -146,10 +133,11 @@ def _grasp(args: argparse.Namespace) -> int:
     if not args.paths and not args.record:
         raise UsageError("grasp needs at least one PATH or --record RECORD.json")
     if args.plot:
-        _check_picture(args.plot, "--plot")
+        check_picture(args.plot, "--plot", args.size, args.dpi)
     explorer = get_explorer(args.explorer) if args.paths else None
     finger = load_finger(args.finger)
     items = [(p, False) for p in args.paths] + [(r, True) for r in args.record]
+    pictures = picture_paths(args.plot, [item for item, _ in items]) if args.plot else []
     failed = 0
     for index, (item, is_record) in enumerate(items):
         try:
@@ -166,19 +154,9 @@ def _grasp(args: argparse.Namespace) -> int:
                 margin=args.margin,
                 mass=args.mass,
             )
-            if args.plot:
-                from tactile_kb.plot import plot_exploration
-
-                plot_exploration(
-                    model,
-                    _plot_path(args.plot, index, len(items), item),
-                    grasp=plan,
-                    size=args.size,
-                    dpi=args.dpi,
-                )
         except TactileKBError as exc:
             failed += 1
-            print(f"tactile-kb: error: {item}: {exc}", file=sys.stderr, flush=True)
+            print(error_line(item, exc), file=sys.stderr, flush=True)
             continue
         if not plan.ok:
             failed += 1
@@ -188,6 +166,14 @@ def _grasp(args: argparse.Namespace) -> int:
             print(json.dumps(out), flush=True)
         else:
             print(_line(plan), flush=True)
+        if pictures:  # the plan is out before any picture is drawn
+            from tactile_kb.plot import plot_exploration
+
+            try:
+                plot_exploration(model, pictures[index], grasp=plan, size=args.size, dpi=args.dpi)
+            except TactileKBError as exc:
+                failed += 1
+                print(error_line(item, exc), file=sys.stderr, flush=True)
     return 1 if failed else 0
 
 
@@ -195,7 +181,7 @@ def _plot(args: argparse.Namespace) -> int:
     from tactile_kb.plot import plot_exploration
     from tactile_kb.record import ExplorationRecord
 
-    _check_picture(args.out, "--out")
+    check_picture(args.out, "--out", args.size, args.dpi)
     record = ExplorationRecord.load(args.record)
     mesh = None
     if args.mesh:
@@ -213,7 +199,7 @@ def _tree(args: argparse.Namespace) -> int:
     from tactile_kb.compiler import compile_rules
     from tactile_kb.plot import plot_tree
 
-    _check_picture(args.out, "--out")
+    check_picture(args.out, "--out", args.size, args.dpi)
     kb = compile_rules(args.rules)
     decision = None
     if args.bits is not None:
