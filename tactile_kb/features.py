@@ -74,6 +74,8 @@ __all__ = [
     "get_feature",
     "lateral_common_point",
     "lateral_edges",
+    "measure",
+    "measure_names",
     "parallelism_table",
     "perpendicularity_table",
     "section_at",
@@ -516,6 +518,42 @@ def triangle_faces(model: ObjectModel) -> bool:
 def convex(model: ObjectModel) -> bool:
     """No concave face was touched (an object of several boxes is not convex)."""
     return model.convex
+
+
+# ---------------------------------------------------------------------------------------------
+# measures: numbers a class's answer may report (``report: [sides]`` in a rule file)
+
+
+_MEASURES: dict[str, tuple[Callable[[Polyhedron], float | int], str]] = {
+    "faces": (lambda p: len(p.faces), "number of faces of the polyhedron"),
+    "vertices": (lambda p: len(p.vertices), "number of vertices"),
+    "edges": (lambda p: len(p.edges), "number of edges"),
+    "volume": (lambda p: float(p.volume), "volume, cubic metres"),
+    "height": (lambda p: float(np.ptp(p.vertices[:, 2])), "height above the table, metres"),
+}
+
+
+def measure_names() -> list[str]:
+    """The measures a rule file's class may report, sorted."""
+    return sorted([*_MEASURES, "sides"])
+
+
+def measure(model: ObjectModel, name: str) -> float | int | None:
+    """The measure ``name`` of ``model`` (see :func:`measure_names`); None when the model
+    cannot give it (no closed polyhedron, no base to count sides from).
+
+    ``sides`` is the n of an n-gonal prism, pyramid or frustum: the number of lateral faces.
+    """
+    if name not in measure_names():
+        raise UsageError(f"unknown measure {name!r} (known: {', '.join(measure_names())})")
+    if model.polyhedron is None:
+        return None
+    if name == "sides":
+        try:
+            return side_count(model)
+        except GeometryError:
+            return None
+    return _MEASURES[name][0](model.polyhedron)
 
 
 def _feature(fn: FeatureFn, requires: Literal["contact", "model"] = "model") -> Feature:

@@ -31,7 +31,7 @@ from tactile_kb.compiler import KnowledgeBase, compile_rules
 from tactile_kb.engine import Decision
 from tactile_kb.errors import Problem, RuleFileError, UsageError
 from tactile_kb.explorers import Explorer, Goal, get_explorer
-from tactile_kb.features import check_binding, get_feature
+from tactile_kb.features import check_binding, get_feature, measure, measure_names
 from tactile_kb.finger import Finger
 from tactile_kb.model import ObjectModel, build_model
 from tactile_kb.objects import ObjectLike, object_name
@@ -58,6 +58,8 @@ class Classification:
     record: ExplorationRecord
     model: ObjectModel
     seconds: float
+    rules: RuleSet = field(repr=False)
+    """The rule set that decided."""
     contacts_per_phase: dict[str, int] = field(default_factory=dict)
     """Touches made by the time each rule-file phase was decided (cumulative)."""
 
@@ -65,6 +67,23 @@ class Classification:
     def planes(self) -> int:
         """Distinct planes in the model (the table included)."""
         return len(self.model.faces)
+
+    @property
+    def measures(self) -> dict[str, float | int | None]:
+        """Every measure of the model (faces, vertices, edges, sides, volume, height)."""
+        return {name: measure(self.model, name) for name in measure_names()}
+
+    @property
+    def reported(self) -> dict[str, float | int | None]:
+        """The measures the decided class reports (its ``report:`` list in the rule file)."""
+        cls = next((c for c in self.rules.classes if c.id == self.decision.label), None)
+        return {name: measure(self.model, name) for name in (cls.report if cls else ())}
+
+    @property
+    def answer(self) -> str:
+        """The answer with the reported measures, e.g. ``OBJECT IS A PRISM (sides = 5)``."""
+        extra = ", ".join(f"{k} = {_fmt(v)}" for k, v in self.reported.items())
+        return f"{self.decision.answer} ({extra})" if extra else self.decision.answer
 
     def summary(self) -> dict[str, Any]:
         """The JSON line of ``tactile-kb classify --json``."""
@@ -81,7 +100,15 @@ class Classification:
             "phase": self.decision.phase,
             "contacts_per_phase": dict(self.contacts_per_phase),
             "explanation": self.decision.explanation,
+            "reported": self.reported,
+            "measures": self.measures,
         }
+
+
+def _fmt(value: float | int | None) -> str:
+    if value is None:
+        return "unknown"
+    return str(value) if isinstance(value, int) else f"{value:.4g}"
 
 
 @lru_cache(maxsize=32)
@@ -131,6 +158,16 @@ def binding_problems(rules: RuleSet, *, missing: str = "error") -> list[Problem]
         message = check_binding(prop.feature.name, prop.feature.params)
         if message:
             problems.append(rules.problem(("propositions", i, "feature"), message))
+    known = measure_names()
+    for i, cls in enumerate(rules.classes):
+        for k, name in enumerate(cls.report):
+            if name not in known:
+                problems.append(
+                    rules.problem(
+                        ("classes", i, "report", k),
+                        f"unknown measure {name!r} (known: {', '.join(known)})",
+                    )
+                )
     return problems
 
 
@@ -225,10 +262,13 @@ def classify(
     session = get_explorer(explorer).session(obj, finger=finger, seed=seed, noise=noise)
     evidence = _Evidence(session.advance, None)
     decision, per_phase = _decide(kb, evidence)
-    record = evidence.record  # as far as the decision needed to explore
-    model = evidence.model("contact")  # the model of that record (no further exploration)
+    # Explore no further than the decision needed, unless its class reports measures of the
+    # whole object (the n of a prism): those need the complete model.
+    cls = next((c for c in kb.rules.classes if c.id == decision.label), None)
+    model = evidence.model("complete" if cls is not None and cls.report else "contact")
+    record = evidence.record
     seconds = time.perf_counter() - t0
-    return Classification(object_name(obj), decision, record, model, seconds, per_phase)
+    return Classification(object_name(obj), decision, record, model, seconds, kb.rules, per_phase)
 
 
 def classify_record(
@@ -244,6 +284,5 @@ def classify_record(
     evidence = _Evidence(no_more, record)
     decision, per_phase = _decide(kb, evidence)
     model = evidence.model("contact")
-    return Classification(
-        record.object, decision, record, model, time.perf_counter() - t0, per_phase
-    )
+    seconds = time.perf_counter() - t0
+    return Classification(record.object, decision, record, model, seconds, kb.rules, per_phase)

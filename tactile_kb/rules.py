@@ -132,6 +132,8 @@ class RuleClass:
     expr: Expr
     line: int
     path: PathT = ()
+    report: tuple[str, ...] = ()
+    """Measures the answer reports (``sides`` for the n of an n-gonal prism, …)."""
 
 
 @dataclass(frozen=True)
@@ -314,6 +316,7 @@ class _ClassModel(BaseModel):
     answer: Text
     name: Text | None = None
     when: ExprText
+    report: list[Id] = []
 
 
 class _OtherwiseModel(BaseModel):
@@ -622,7 +625,11 @@ def _rule_set(src: Source, model: _RuleFileModel, checker: _Checker) -> RuleSet:
         path = ("classes", i, "when")
         name = k.name if k.name is not None else k.id.replace("_", " ")
         line = src.locate(("classes", i, "id"))[0]
-        classes.append(RuleClass(k.id, k.answer, name, k.when, checker.exprs[path], line, path))
+        classes.append(
+            RuleClass(
+                k.id, k.answer, name, k.when, checker.exprs[path], line, path, tuple(k.report)
+            )
+        )
     return RuleSet(
         name=model.name,
         description=model.description,

@@ -99,3 +99,49 @@ def test_bad_inputs_raise_clear_errors(tmp_path: Path) -> None:
     (problem,) = info.value.problems
     assert problem.line == 5
     assert "no_such_feature" in problem.message
+
+
+REPORTING_RULES = """\
+name: reporting
+propositions:
+  - id: A
+    text: There is contact between the object and the finger
+    feature: contact
+phases:
+  - id: I
+    propositions: [A]
+classes:
+  - id: touched
+    answer: OBJECT TOUCHED
+    when: A
+    report: [sides, faces]
+otherwise:
+  id: none
+  answer: NOTHING
+"""
+
+
+def test_a_class_reports_the_measures_it_names(tmp_path: Path) -> None:
+    from tactile_kb.solids import prism
+
+    path = tmp_path / "reporting.yaml"
+    path.write_text(REPORTING_RULES)
+    result = classify(prism(5, 0.05, 0.08), rules=path)
+    assert result.reported == {"sides": 5, "faces": 7}
+    assert result.answer == "OBJECT TOUCHED (sides = 5, faces = 7)"
+    summary = result.summary()
+    assert summary["reported"] == {"sides": 5, "faces": 7}
+    assert summary["measures"]["vertices"] == 10
+    assert summary["measures"]["edges"] == 15
+    assert summary["measures"]["height"] == pytest.approx(0.08, abs=1e-6)
+
+
+def test_unknown_measure_is_located(tmp_path: Path) -> None:
+    path = tmp_path / "reporting.yaml"
+    path.write_text(REPORTING_RULES.replace("report: [sides, faces]", "report: [sides, colour]"))
+    with pytest.raises(RuleFileError) as info:
+        classify(box(0.1, 0.1, 0.1), rules=path)
+    assert [str(p) for p in info.value.problems] == [
+        f"{path}:13:21: classes[0].report[1]: unknown measure 'colour' "
+        "(known: edges, faces, height, sides, vertices, volume)"
+    ]

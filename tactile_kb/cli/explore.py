@@ -67,7 +67,7 @@ def _emit(result: Classification, as_json: bool) -> None:
     if as_json:
         print(json.dumps(result.summary()), flush=True)
     else:
-        print(f"{result.object}- {result.decision.answer}", flush=True)
+        print(f"{result.object}- {result.answer}", flush=True)
 
 
 def _classify(args: argparse.Namespace) -> int:
@@ -155,7 +155,7 @@ def _demo(args: argparse.Namespace) -> int:
         if args.json:
             print(json.dumps({**result.summary(), "object": name}), flush=True)
         else:
-            print(f"{name}- {result.decision.answer}", flush=True)
+            print(f"{name}- {result.answer}", flush=True)
     return 1 if failed else 0
 
 
