@@ -8,8 +8,12 @@ inside its acceptance cone. Two built-in layouts follow the paper's prototypes:
   parallelepipeds);
 * ``"33"``: 33 sensors at the cross-points of meridians and parallels: the pole, 8 on the
   parallel 60° below the equator, 12 on the parallel 30° below, and 12 on the equator, i.e.
-  30° apart, so that plane surfaces 30° apart are told apart. Their cones (21°) cover the
-  whole lower hemisphere (the largest angle to the nearest sensor there is 20.7°).
+  30° apart, so that plane surfaces 30° apart are told apart. Their cones (25°) cover the
+  whole lower hemisphere (the largest angle to the nearest sensor there is 20.7°) and reach
+  20° above the equator at every heading, so that faces overhanging by up to 20° (a regular
+  octahedron's lower faces: 19.47°) are felt whatever the object's turn. Overlapping cones
+  fire two or three neighbouring sensors together; the controller takes their mean direction,
+  and quantisation (the nearest sensor) is unchanged.
 
 Custom layouts load from YAML (:func:`load_layout`) with located errors
 (:class:`~tactile_kb.errors.LayoutFileError`), and :func:`coverage` reports, for a layout,
@@ -125,7 +129,7 @@ def _layout_33() -> Finger:
     dirs += _ring(-60.0, 8)
     dirs += _ring(-30.0, 12)
     dirs += _ring(0.0, 12)
-    return Finger(name="33", directions=tuple(dirs), cone_deg=21.0)
+    return Finger(name="33", directions=tuple(dirs), cone_deg=25.0)
 
 
 BUILTIN_LAYOUTS = {"4": _layout_4, "33": _layout_33}

@@ -16,21 +16,31 @@
   (gates 1–3) and is followed. Blocks C and D: the end of ``l2`` or ``l3`` never starts a new
   cycle. If the cycle ends without contact, the object has at least one dimension smaller
   than ``l2``: the layer ends with that note.
-* **z increments.** When the first contact of a layer is met a second time (the same sensor
-  on the same surface, reached by sliding back to the first contact point), the finger moves
-  up by ``z_step`` and explores the new plane z = const. The increments end when contact is
-  no longer kept after one — unless a short horizontal search towards the object regains it
-  (a face sloping inwards, as on a pyramid, loses contact on every step).
-* **Other planes.** Tops and faces sloping away, which contouring in horizontal planes cannot
-  touch, are explored from above: a vertical approach over the middle of the last contour,
-  then two short orthogonal slides on what was touched (three non-collinear tip centres per
-  face). A touch that cannot slide (an apex or an edge) is noted and not recorded as a plane.
+* **z increments.** When the first surface of a layer is touched a second time, the finger
+  slides on to where the layer began and moves up by ``z_step`` to explore the new plane
+  z = const. The increments end when contact is no longer kept after one — unless a short
+  horizontal search towards the middle of the layer regains it (a face sloping inwards, as on
+  a pyramid, loses contact on every step). A face overhanging the finger stops it going up:
+  it steps away from the face, goes up, and searches back. In the last plane (the next one
+  would be over the top) the contour is closed without touching the first surface again:
+  when the surface before it ends where the layer began.
+* **Edges are not surfaces.** A touch whose slide rolls off at once (within ``edge_slide``)
+  touched an edge or a vertex; its contact is dropped from the record, unless such touches
+  come three or more in a row (a curved surface is all edges to a sliding tip). A layer
+  narrower than the tip (round an apex) is dropped whole.
+* **Other planes.** "Exploration can eventually continue in different planes": a surface
+  that only one layer slid along (narrow there, or skipped by a search cycle) is touched once
+  more at another height, approached along its normal from outside the object (``probe``),
+  so that every face has tip centres at two heights; and tops, which contouring in
+  horizontal planes cannot touch, are explored from above: a vertical approach over the
+  middle of the last contour, then slides round a diamond on its principal axes. A touch
+  from above that cannot slide (an apex or an edge) is noted and not recorded as a plane.
 
-Contacts: a ``"touch"`` contact on every OFF→ON of the followed sensor and a ``"slide"`` contact
-at the end of every tangential move (several tip centres per face, over the layers, so that
-face normals can be refined by fitting them). ``r0`` is the followed sensor's direction or,
-when neighbouring sensors with overlapping cones closed together with it, the normalised mean
-of their directions.
+Contacts: a ``"touch"`` contact on every OFF→ON of the followed sensor and ``"slide"``
+contacts every ``spacing`` along each tangential move and at its end (many tip centres per
+face without more touches, so that face normals can be fitted through them and the position
+noise averages out). ``r0`` is the followed sensor's direction or, when neighbouring sensors
+with overlapping cones closed together with it, the normalised mean of their directions.
 
 Examples
 --------
@@ -41,6 +51,7 @@ Examples
 
 from __future__ import annotations
 
+import itertools
 import math
 from collections.abc import Iterator, Sequence
 from dataclasses import asdict, dataclass, field
@@ -62,6 +73,9 @@ FArray = NDArray[np.float64]
 
 _Z = np.array([0.0, 0.0, 1.0])
 
+CURVED_RUN = 3
+"""Edge touches in a row (each rolling off within ``edge_slide``) that mean a curved surface."""
+
 
 @dataclass(frozen=True)
 class ServoParams:
@@ -77,16 +91,30 @@ class ServoParams:
     l3
         Search this far orthogonally to ``l2``, back (at least ``l1``).
     z_step
-        The fixed z increment between layers; ``None``: 0.45 × the height of the world's
-        visual hint (two layers on most objects).
+        The fixed z increment between layers; ``None``: 0.35 × the height of the world's
+        visual hint (two layers on most objects: at 0.35 and 0.7 of it).
     z_first
-        Height of the first layer (tip centre); ``None``: 0.3 × the hint's height, at least
-        ρ + 1 mm.
+        Height of the first layer (tip centre); ``None``: 0.35 × the hint's height, at least
+        ρ + 1 mm (high enough that a sphere's surface there overhangs by less than the 20°
+        the 33-sensor finger can feel).
+    spacing
+        A ``"slide"`` contact is recorded every ``spacing`` along a slide (more tip centres
+        per face without more touches, so that fitted face normals average the position
+        noise out); ``None``: a thirtieth of the hint's horizontal diagonal, at least 1.5 mm.
+    edge_slide
+        A touch whose slide loses the contact (or rolls onto a neighbouring sensor) within
+        this distance touched an edge or a vertex, not a surface: it is dropped from the
+        record; ``None``: ρ / 2.
+    probe
+        After the layers, touch again every surface that only one layer slid along (narrow
+        there, or skipped by a search cycle), at a height between that layer and the nearest
+        other one: one touch each, so that every face has tip centres at two heights and its
+        normal can be fitted.
     top
         Explore tops from above after the layers.
-    top_slide
-        Least length of the two slides that check a touch from above (they also reach 0.3 of
-        the last contour's width); ``None``: ``l1``.
+    top_spread
+        The slides on a top reach this fraction of the last contour's half-widths from its
+        middle (a rectangle of slides, so that the top's tip centres span it).
     approach_margin
         Free space kept outside the hint box when approaching.
     max_motions
@@ -102,8 +130,11 @@ class ServoParams:
     l3: float = 0.016
     z_step: float | None = None
     z_first: float | None = None
+    spacing: float | None = None
+    edge_slide: float | None = None
+    probe: bool = True
     top: bool = True
-    top_slide: float | None = None
+    top_spread: float = 0.45
     approach_margin: float = 0.01
     max_motions: int = 3000
     max_layer_motions: int = 400
@@ -114,10 +145,14 @@ class ServoParams:
             v = getattr(self, name)
             if not (math.isfinite(v) and v > 0):
                 raise UsageError(f"servo parameter {name} must be > 0 metres, got {v}")
-        for name in ("z_step", "z_first", "top_slide"):
+        for name in ("z_step", "z_first", "spacing", "edge_slide"):
             v = getattr(self, name)
             if v is not None and not (math.isfinite(v) and v > 0):
                 raise UsageError(f"servo parameter {name} must be > 0 metres or None, got {v}")
+        if not (math.isfinite(self.top_spread) and 0.0 < self.top_spread < 1.0):
+            raise UsageError(
+                f"servo parameter top_spread must lie in (0, 1), got {self.top_spread}"
+            )
         for name in ("max_motions", "max_layer_motions", "max_layers"):
             if getattr(self, name) < 1:
                 raise UsageError(f"servo parameter {name} must be ≥ 1")
@@ -179,10 +214,11 @@ class Controller:
         self._dirs = self.finger.matrix
         hint = world.hint
         height = max(float(hint.hi[2]), 2.0 * self.rho)
-        self.z_step = self.params.z_step or max(0.45 * height, 0.5 * self.rho)
-        self.z_first = self.params.z_first or max(0.3 * height, self.rho + 0.001)
-        self.top_slide = self.params.top_slide or self.params.l1
+        self.z_step = self.params.z_step or max(0.35 * height, 0.5 * self.rho)
+        self.z_first = self.params.z_first or max(0.35 * height, self.rho + 0.001)
         size = hint.size
+        self.spacing = self.params.spacing or max(0.0015, math.hypot(size[0], size[1]) / 30.0)
+        self.edge_slide = self.params.edge_slide or 0.5 * self.rho
         self.reach = float(
             math.hypot(size[0], size[1]) + 2 * (self.rho + self.params.approach_margin)
         )
@@ -195,6 +231,8 @@ class Controller:
         self._phase = "first-contact"
         self._layer: int | None = None
         self._last_pos: Vec3 | None = None
+        self._surfaces: list[tuple[float, _Segment]] = []  # (layer z, surface slid along)
+        self._heights: list[float] = []  # the z of every layer
 
     # bookkeeping -----------------------------------------------------------------------------
     def _note(self, text: str) -> None:
@@ -253,7 +291,12 @@ class Controller:
             for k, v in asdict(self.params).items()
             if isinstance(v, int | float) and not isinstance(v, bool)
         }
-        params.update(z_step=self.z_step, z_first=self.z_first, top_slide=self.top_slide)
+        params.update(
+            z_step=self.z_step,
+            z_first=self.z_first,
+            spacing=self.spacing,
+            edge_slide=self.edge_slide,
+        )
         params.update(self.extra_params)
         return ExplorationRecord(
             object=self.object_name,
@@ -279,35 +322,58 @@ class Controller:
             pos, follow = self._first_contact()
             yield "contact"
             self._phase = "layers"
-            last_path: list[Vec3] = []
+            layer_contacts: list[Contact] = []
+            top_contacts: list[Contact] = []
             z = float(pos[2])
+            top = float(self.world.hint.hi[2])
             index = 0
-            while index < self.params.max_layers:
+            while True:
                 self._layer = index
                 # the contact that starts the layer belongs to it
                 self.contacts[-1] = self.contacts[-1].model_copy(update={"layer": index})
                 self._layer_motions = 0
                 start_path = len(self.path)
                 start_contacts = len(self.contacts) - 1
-                closed, pos, follow = self._contour(pos, follow)
+                above = z + self.z_step > top - self.rho  # the next plane would be over the top
+                last = above or index + 1 >= self.params.max_layers
+                closed, pos, follow = self._contour(pos, follow, last=last)
                 layer_path = self.path[start_path - 1 if start_path else 0 :]
                 self._finish_layer(index, z, layer_path, start_contacts, closed)
-                last_path = layer_path
+                layer_contacts = [c for c in self.contacts[start_contacts:] if c.layer == index]
+                self._heights.append(z)
+                if index and self._narrow(layer_contacts, top_contacts):
+                    # near an apex the faces are narrower than the tip: its touches are edges
+                    self._note(
+                        f"the layer at z = {z:.4f} m is too narrow for the tip: its contacts "
+                        "are dropped and the surfaces are probed lower"
+                    )
+                    self.contacts = [c for c in self.contacts if c.layer != index]
+                    self._surfaces = [(h, g) for h, g in self._surfaces if abs(h - z) > 1e-12]
+                    self.layers[-1] = self.layers[-1].model_copy(update={"contour": []})
+                    yield "layer"
+                    break
+                if closed or not top_contacts:
+                    top_contacts = layer_contacts  # the top is explored over the last closed layer
                 yield "layer"
                 if not closed:
                     break
-                nxt = self._z_increment(pos, follow)
+                if last:
+                    if not above:
+                        self._note(f"stopped after {self.params.max_layers} layers")
+                    break
+                nxt = self._z_increment(pos, follow, _centre(layer_contacts))
                 if nxt is None:
                     break
                 pos, follow = nxt
                 z = float(pos[2])
                 index += 1
-            else:
-                self._note(f"stopped after {self.params.max_layers} layers")
             self._layer = None
+            if self.params.probe:
+                self._phase = "probe"
+                self._probe(_centre(top_contacts))
             if self.params.top:
                 self._phase = "top"
-                self._top(last_path)
+                self._top(top_contacts)
         except _Budget as exc:
             self._note(str(exc))
         yield "complete"
@@ -349,108 +415,171 @@ class Controller:
             return None
         return t / norm
 
-    def _contour(self, pos: FArray, f: _Follow) -> tuple[bool, FArray, _Follow]:
-        """Follow the contour in the current plane z = const; return (closed, position, follow)."""
+    def _slide_sampled(
+        self, pos: FArray, direction: FArray, f: _Follow, length: float
+    ) -> tuple[Motion, float]:
+        """Slide up to ``length`` along the surface under ``f``, recording a ``"slide"`` contact
+        every :attr:`spacing`; the last motion (not recorded) and the distance travelled."""
+        travelled = 0.0
+        while True:
+            piece = min(self.spacing, length - travelled)
+            m = self._slide(pos, direction, piece, f.sensor)
+            travelled += m.distance
+            if m.event != "none" or m.distance < piece - 1e-9 or travelled >= length - 1e-9:
+                return m, travelled
+            self._record(m, f, "slide")
+            pos = np.asarray(m.end, dtype=float)
+
+    def _contour(
+        self, pos: FArray, f: _Follow, *, last: bool = False
+    ) -> tuple[bool, FArray, _Follow]:
+        """Follow the contour in the current plane z = const; return (closed, position, follow).
+
+        The layer is closed when the first surface slid along is touched a second time, when
+        the contour comes back on any surface it already followed, or, in the ``last`` layer,
+        when the surface before the first one ends where the layer began (no touch needed).
+
+        A touch whose slide rolls off at once (within ``edge_slide``) touched an edge or a
+        vertex: it is dropped from the record, unless the touch before or after it is such a
+        touch too (a curved surface is all edges to a sliding tip, and is kept).
+        """
+        edges = _EdgeTouches()
+        segs: list[_Segment] = []
+        try:
+            return self._trace(pos, f, last, edges, segs)
+        finally:
+            for index in sorted(edges.final(), reverse=True):
+                del self.contacts[index]
+            self._surfaces += [(float(pos[2]), g) for g in segs if not g.edge]
+
+    def _trace(
+        self, pos: FArray, f: _Follow, last: bool, edges: _EdgeTouches, segs: list[_Segment]
+    ) -> tuple[bool, FArray, _Follow]:
         p = self.params
-        first_c = np.asarray(pos, dtype=float)
-        first_group = set(f.group)
-        first_dir: FArray | None = None
-        touches = 0
-        other_seen = False
-        followed: list[
-            tuple[frozenset[int], FArray, FArray, float]
-        ] = []  # group, start, dir, length
+        fresh: int | None = len(self.contacts) - 1 if self._last_is_touch() else None
+        since = 0.0  # distance slid since the fresh touch
         while self._layer_motions < p.max_layer_motions:
+            new_touch = fresh is not None and since == 0.0
+            surfaces = [g for g in segs if not g.edge]
+            if new_touch and surfaces and self._on_first(surfaces, pos, f):
+                # the first surface again: slide on to where the layer began (more tip centres
+                # on it, no touch), then the layer is closed
+                first = surfaces[0]
+                rest = float((first.start - pos) @ first.direction)
+                t = self._tangent(f)
+                if rest > self.spacing and t is not None:
+                    m, travelled = self._slide_sampled(pos, t, f, rest)
+                    segs.append(
+                        _Segment(frozenset(f.group), pos, first.direction, travelled, f.r0.copy())
+                    )
+                    pos = np.asarray(m.end, dtype=float)
+                    self._record(m, f, "slide")
+                else:
+                    segs.append(_Segment(frozenset(f.group), pos, first.direction, 0.0, f.r0))
+                return True, pos, f
+            if new_touch and surfaces and self._back_on(surfaces, pos, f):
+                return True, pos, f
             t = self._tangent(f)
             if t is None:
                 self._note("a horizontal surface met while contouring; contour stopped")
                 return False, pos, f
-            direction, length, closing = t, self.reach, False
-            if not set(f.group) & first_group:
-                other_seen = True
-            if other_seen and first_dir is not None and set(f.group) & first_group:
-                # the first contact met a second time? slide back to the first contact point
-                d = first_c - pos
-                s = float(d @ first_dir)
-                off = float(np.linalg.norm(d - s * first_dir))
-                if off <= max(0.002, 0.2 * self.rho) and s >= -(p.l3 + self.rho):
-                    if s < 0:
-                        self._record_here(pos, f)
-                        return True, pos, f
-                    direction, length, closing = first_dir, s, True
-            if not closing and self._back_on(followed, pos, f):
-                # the contour is back on a surface it already followed: the layer is closed
-                return True, pos, f
-            m = self._slide(pos, direction, length, f.sensor)
-            if first_dir is None:
-                first_dir = np.asarray(m.direction, dtype=float)
+            start = pos
+            m, travelled = self._slide_sampled(pos, t, f, self.reach)
             pos = np.asarray(m.end, dtype=float)
-            if closing and m.event == "none":
-                self._record(m, f, "slide")
-                return True, pos, f
-            if m.distance > 0:
-                followed.append(
-                    (
-                        frozenset(f.group),
-                        np.asarray(m.start, dtype=float),
-                        np.asarray(m.direction, dtype=float),
-                        m.distance,
+            since += travelled
+            edge = False
+            if fresh is not None and since >= self.edge_slide:
+                edges.surface()
+                fresh = None
+            elif fresh is not None and self._rolled(m, f):
+                edge = True
+            if travelled > 0:
+                if segs and segs[-1].group == frozenset(f.group) and since > travelled:
+                    segs[-1].length += travelled  # the same surface, after another sensor opened
+                else:
+                    direction = np.asarray(m.direction, dtype=float)
+                    segs.append(
+                        _Segment(frozenset(f.group), start, direction, travelled, f.r0.copy())
                     )
-                )
-            f, touches, done = self._after_slide(m, f, touches)
-            if done is not None:
-                return done, pos, f
-            if m.event == "release" and f.sensor not in m.fired:
+            if edge and fresh is not None:
+                edges.edge(fresh, segs[-1] if travelled > 0 else None)
+                fresh = None
+            if m.event == "touch":
+                if not edge:
+                    self._record(m, f, "slide")  # the end of the surface followed
+                f = self._follow(m.closed)
+                self._record(m, f, "touch")
+                fresh, since = len(self.contacts) - 1, 0.0
+                continue
+            if m.event == "release":
+                if f.sensor in m.fired:  # another surface's sensor opened: keep following
+                    continue
+                if not edge:
+                    self._record(m, f, "slide")
+                fresh = None
+                if last and self._before_first([g for g in segs if not g.edge], pos, f):
+                    return True, pos, f
                 found = self._search(pos, np.asarray(m.direction, dtype=float), f)
                 if found is None:
                     return False, np.asarray(self._last_pos, dtype=float), f
                 pos, f = found
-                touches += 1
+                fresh, since = len(self.contacts) - 1, 0.0
+                continue
+            self._record(m, f, "slide")
+            what = {
+                "none": "the slide found no end",
+                "limit": "the workspace ends",
+                "blocked": "a surface blocked the slide without a sensor change",
+            }
+            self._note(f"contour stopped at {_fmt(m.end)}: {what.get(m.event, m.event)}")
+            return False, pos, f
         self._note(f"contour budget of {p.max_layer_motions} motions exhausted")
         return False, pos, f
 
-    def _back_on(
-        self, followed: list[tuple[frozenset[int], FArray, FArray, float]], pos: FArray, f: _Follow
-    ) -> bool:
-        """Whether ``pos`` (a new contact of ``f``) lies on a surface already followed in this layer."""
-        reach_back = self.params.l3 + self.rho
-        for group, start, direction, length in followed[:-1] if followed else []:
-            if not group & set(f.group):
-                continue
-            d = pos - start
-            s = float(d @ direction)
-            off = float(np.linalg.norm(d - s * direction))
-            if off <= max(0.002, 0.2 * self.rho) and -reach_back <= s <= length + 1e-6:
-                return True
+    def _last_is_touch(self) -> bool:
+        return bool(self.contacts) and self.contacts[-1].kind == "touch"
+
+    def _rolled(self, m: Motion, f: _Follow) -> bool:
+        """Whether a slide ended by rolling off an edge: the followed sensor opened, or a
+        neighbouring sensor (within 40° of the followed direction) closed."""
+        if m.event == "release":
+            return f.sensor not in m.fired
+        if m.event == "touch" and m.closed:
+            return bool((self._dirs[list(m.closed)] @ f.r0 >= math.cos(math.radians(40.0))).all())
         return False
 
-    def _record_here(self, pos: FArray, f: _Follow) -> None:
-        """A slide contact where the finger is (the contour closes behind the first contact)."""
-        fired = self.world.sense(_v3(pos))
-        p = _v3(pos)
-        m = Motion("slide", p, p, (1.0, 0.0, 0.0), 0.0, "none", fired, fired, (), (), p)
-        self._record(m, f, "slide")
+    def _on_first(self, segs: list[_Segment], pos: FArray, f: _Follow) -> bool:
+        """Whether a new touch at ``pos`` is the first surface of the layer met a second time."""
+        first = segs[0]
+        if not (set(f.group) & first.group) or all(s.group == first.group for s in segs):
+            return False
+        d = first.start - pos
+        s = float(d @ first.direction)
+        off = float(np.linalg.norm(d - s * first.direction))
+        return off <= max(0.002, 0.2 * self.rho) and s >= -(self.params.l3 + self.rho)
 
-    def _after_slide(self, m: Motion, f: _Follow, touches: int) -> tuple[_Follow, int, bool | None]:
-        """Handle the end of a slide; return (follow, touches, closed-or-None-to-continue)."""
-        if m.event == "touch":
-            self._record(m, f, "slide")
-            nf = self._follow(m.closed)
-            self._record(m, nf, "touch")
-            return nf, touches + 1, None
-        if m.event == "release":
-            if f.sensor in m.fired:  # another surface's sensor opened: keep following
-                return f, touches, None
-            self._record(m, f, "slide")
-            return f, touches, None
-        self._record(m, f, "slide")
-        what = {
-            "none": "the slide found no end",
-            "limit": "the workspace ends",
-            "blocked": "a surface blocked the slide without a sensor change",
-        }
-        self._note(f"contour stopped at {_fmt(m.end)}: {what.get(m.event, m.event)}")
-        return f, touches, False
+    def _before_first(self, segs: list[_Segment], pos: FArray, f: _Follow) -> bool:
+        """Whether the surface just left ends where the layer's first surface begins."""
+        if len(segs) < 2 or set(f.group) & segs[0].group:
+            return False
+        first = segs[0]
+        d = first.start - pos
+        s = float(d @ first.direction)
+        off = float(np.linalg.norm(d - s * first.direction))
+        return off <= 2.0 * self.rho and s >= -self.rho
+
+    def _back_on(self, segs: list[_Segment], pos: FArray, f: _Follow) -> bool:
+        """Whether ``pos`` (a new contact of ``f``) lies on a surface already followed in this layer."""
+        reach_back = self.params.l3 + self.rho
+        for seg in segs[:-1]:
+            if not seg.group & set(f.group):
+                continue
+            d = pos - seg.start
+            s = float(d @ seg.direction)
+            off = float(np.linalg.norm(d - s * seg.direction))
+            if off <= max(0.002, 0.2 * self.rho) and -reach_back <= s <= seg.length + 1e-6:
+                return True
+        return False
 
     def _search(self, pos: FArray, t: FArray, f: _Follow) -> tuple[FArray, _Follow] | None:
         """The l1, l2, l3 cycle after a loss of contact; the new contact, or None."""
@@ -475,8 +604,27 @@ class Controller:
         )
         return None
 
-    def _z_increment(self, pos: FArray, f: _Follow) -> tuple[FArray, _Follow] | None:
-        """Move up by z_step; the first contact of the next layer, or None when contact is lost."""
+    def _move_on(self, pos: FArray, direction: FArray, length: float) -> Motion:
+        """Move ``length`` along ``direction`` through losses of contact; stop at anything else."""
+        done = 0.0
+        while True:
+            m = self._move(pos, direction, length - done)
+            done += m.distance
+            pos = np.asarray(m.end, dtype=float)
+            if m.event != "release" or done >= length - 1e-9 or m.distance <= 0.0:
+                return m
+
+    def _z_increment(
+        self, pos: FArray, f: _Follow, centre: FArray | None = None
+    ) -> tuple[FArray, _Follow] | None:
+        """Move up by z_step; the first contact of the next layer, or None when contact is lost.
+
+        Contact kept (a vertical surface): go on from there. Contact lost (a surface sloping
+        inwards): finish the step, then search horizontally towards ``centre`` (the middle of
+        the layer, or along r0). Blocked (a surface overhanging): step away from it, up, and
+        search towards ``centre``.
+        """
+        start_z = float(pos[2])
         m = self._move(pos, _Z, self.z_step)
         pos = np.asarray(m.end, dtype=float)
         if m.event == "none" and f.sensor in m.fired:
@@ -484,34 +632,163 @@ class Controller:
             nf = _Follow(f.sensor, tuple(s for s in f.group if s in m.fired) or (f.sensor,), f.r0)
             self._record(m, nf, "slide")
             return pos, nf
-        if m.event == "touch":
+        if m.event == "touch" and m.distance >= self.z_step - 1e-6:
             nf = self._follow(m.closed)
             self._record(m, nf, "touch")
             return pos, nf
+        if m.event == "none" and not m.fired:  # not in contact (the layer ended off a surface)
+            return self._regain(pos, f, centre)
         if m.event == "release":
             rest = self.z_step - m.distance
             if rest > 1e-9:
-                m = self._move(pos, _Z, rest)
+                m = self._move_on(pos, _Z, rest)
                 pos = np.asarray(m.end, dtype=float)
                 if m.event == "touch":
                     nf = self._follow(m.closed)
                     self._record(m, nf, "touch")
                     return pos, nf
-                if m.event != "none":
+                if m.event not in ("none", "release"):
+                    self._note(f"the z increment stopped at {_fmt(m.end)} ({m.event}): layers end")
                     return None
-            towards = _unit(np.array([f.r0[0], f.r0[1], 0.0]))
-            if float(np.linalg.norm(towards)) < 1e-9:
+            return self._regain(pos, f, centre)
+        if m.event in ("blocked", "touch"):
+            # the surface overhangs (the tip is stopped, or rolls onto it): clear it (up to 31°
+            # of overhang), go up the rest of the step, and search back towards the middle
+            away = _unit(np.array([-f.r0[0], -f.r0[1], 0.0]))
+            if float(np.linalg.norm(away)) < 1e-9:
+                self._note(f"the z increment is blocked at {_fmt(m.end)}: layers end")
                 return None
-            m = self._move(pos, towards, self.reach)
-            pos = np.asarray(m.end, dtype=float)
-            if m.event == "touch":
-                nf = self._follow(m.closed)
-                self._record(m, nf, "touch")
-                return pos, nf
-            self._note(f"contact not kept after the z increment to {pos[2]:.4f} m: layers end")
-            return None
+            rest = start_z + self.z_step - float(pos[2])
+            for direction, length in ((away, 0.6 * self.z_step + self.rho), (_Z, rest)):
+                m = self._move_on(pos, direction, length)
+                pos = np.asarray(m.end, dtype=float)
+                if m.event not in ("none", "release"):
+                    self._note(f"the z increment stopped at {_fmt(m.end)} ({m.event}): layers end")
+                    return None
+            return self._regain(pos, f, centre)
         self._note(f"the z increment stopped at {_fmt(m.end)} ({m.event}): layers end")
         return None
+
+    def _regain(
+        self, pos: FArray, f: _Follow, centre: FArray | None
+    ) -> tuple[FArray, _Follow] | None:
+        """Search horizontally for the object after a z increment: towards ``centre`` or r0."""
+        towards = _unit(np.array([f.r0[0], f.r0[1], 0.0]))
+        if centre is not None:
+            to_centre = np.array([centre[0] - pos[0], centre[1] - pos[1], 0.0])
+            if float(np.linalg.norm(to_centre)) > 1e-6:
+                towards = _unit(to_centre)
+        if float(np.linalg.norm(towards)) < 1e-9:
+            return None
+        m = self._move(pos, towards, self.reach)
+        pos = np.asarray(m.end, dtype=float)
+        if m.event == "touch":
+            nf = self._follow(m.closed)
+            self._record(m, nf, "touch")
+            return pos, nf
+        self._note(f"contact not kept after the z increment to {pos[2]:.4f} m: layers end")
+        return None
+
+    def _narrow(self, contacts: list[Contact], below: list[Contact]) -> bool:
+        """Whether a layer's contour is narrower than the tip's diameter (beyond the tip centres'
+        offset ρ) and under 60 % of the layer below it: it ran round an apex, not faces."""
+        if not below:
+            return False
+        if len(contacts) < 3:
+            return True
+        size, size_below = _radius(contacts), _radius(below)
+        return size - self.rho < 2.0 * self.rho and size < 0.6 * size_below
+
+    def _probe(self, centre: FArray | None) -> None:
+        """Touch every surface slid along in one layer only once more, at another height."""
+        heights = sorted(set(self._heights))
+        if len(heights) < 2 or centre is None:
+            return
+        seen: dict[frozenset[int], list[tuple[float, _Segment]]] = {}
+        for z, seg in self._surfaces:
+            seen.setdefault(seg.group, []).append((z, seg))
+        for found in seen.values():
+            zs = {z for z, _ in found}
+            if len(zs) > 1:
+                continue
+            z0 = zs.pop()
+            segs = [g for _, g in found]
+            seg = max(segs, key=lambda g: g.length)
+            out = np.array([-seg.r0[0], -seg.r0[1], 0.0])
+            if float(np.linalg.norm(out)) < 0.3:  # a top or a bottom: not for a horizontal probe
+                continue
+            # the surface's stretch in that layer, from every tip centre on it: aim at 30 % of it
+            # and slide across the rest (it may be narrower at the other height)
+            ends = np.asarray(
+                [p for g in segs for p in (g.start, g.start + g.length * g.direction)]
+            )
+            along = (ends - seg.start) @ seg.direction
+            aim = seg.start + (0.7 * along.min() + 0.3 * along.max()) * seg.direction
+            z1 = min((z for z in heights if z != z0), key=lambda z: abs(z - z0))
+            z = z0 + 0.6 * (z1 - z0)
+            if not self._probe_one(aim, _unit(out), z, centre, seg.group):
+                return
+
+    def _probe_one(
+        self, aim: FArray, out: FArray, z: float, centre: FArray, group: frozenset[int]
+    ) -> bool:
+        """Approach a surface at height ``z`` along its outward normal ``out``, from outside the
+        hint box, towards the point ``aim`` of its stretch in a layer, and slide along it;
+        False when the way there is blocked (no more probes).
+
+        The touch is kept when it fired the surface's own sensors (``group``), even if the
+        surface is too narrow there to slide far; otherwise it must slide like a surface.
+        """
+        hint = self.world.hint
+        lo, hi = np.asarray(hint.lo, dtype=float), np.asarray(hint.hi, dtype=float)
+        clear = self.rho + self.params.approach_margin
+        # the way out: away from the middle of the object, then up over it, then down outside it
+        here = np.asarray(self._last_pos, dtype=float)
+        away = _unit(np.array([here[0] - centre[0], here[1] - centre[1], 0.0]))
+        target = np.array([aim[0], aim[1], z])
+        far = target + out * (_exit(target, out, lo, hi) + clear)
+        safe = float(hi[2]) + clear
+        legs: list[tuple[FArray, float]] = []
+        if float(np.linalg.norm(away)) > 0.5:
+            legs.append((away, _exit(here, away, lo, hi) + clear))
+        for leg_dir, length in legs:
+            m = self._move(here, leg_dir, length)
+            here = np.asarray(m.end, dtype=float)
+            if m.event in ("touch", "blocked"):
+                self._note(f"the way to a probe is blocked at {_fmt(m.end)}")
+                return False
+        for goal in (
+            np.array([here[0], here[1], safe]),
+            np.array([far[0], far[1], safe]),
+            far,
+        ):
+            d = goal - here
+            length = float(np.linalg.norm(d))
+            if length < 1e-9:
+                continue
+            m = self._move_on(here, d / length, length)
+            here = np.asarray(m.end, dtype=float)
+            if m.event not in ("none", "release"):
+                self._note(f"the way to a probe is blocked at {_fmt(m.end)} ({m.event})")
+                return False
+        m = self._move(here, -out, float(np.linalg.norm(far - target)) + self.params.l2)
+        if m.event != "touch":
+            self._note(f"a probe at z = {z:.4f} m found nothing ({m.event})")
+            return True
+        f = self._follow(m.closed)
+        first = len(self.contacts)
+        self._record(m, f, "touch")
+        t = self._tangent(f)
+        if t is None:
+            return True
+        sm, travelled = self._slide_sampled(np.asarray(m.end, dtype=float), t, f, self.reach)
+        same = frozenset(m.closed) == group
+        if not same and travelled < self.edge_slide and self._rolled(sm, f):
+            del self.contacts[first:]  # an edge, not the surface
+            return True
+        if travelled > 1e-6:
+            self._record(sm, f, "slide")
+        return True
 
     def _finish_layer(
         self, index: int, z: float, path: list[Vec3], first: int, closed: bool
@@ -531,19 +808,25 @@ class Controller:
             Layer(index=index, z=float(z), path=list(path), contour=contour, closed=closed)
         )
 
-    def _top(self, last_path: list[Vec3]) -> None:
-        """Approach from above over the middle of the last contour; check the touch by slides."""
+    def _top(self, contacts: list[Contact]) -> None:
+        """Approach from above over the middle of the last contour; slide round a diamond on it.
+
+        The diamond's corners lie on the contour's principal axes at ``top_spread`` × its
+        half-widths, so that the tip centres on the top span it. A touch that cannot slide
+        (an apex or an edge) is noted and not recorded as a plane.
+        """
         if self.finger.nearest((0.0, 0.0, -1.0)) is None:
             self._note("no sensor points down: tops are not explored")
             return
-        if not last_path:
+        if len(contacts) < 2:
             return
-        pts = np.asarray(last_path, dtype=float)[:, :2]
-        xy = pts.mean(axis=0)
-        # spread the three tip centres on the top over a good part of it (noise averages out)
-        spread = max(self.top_slide, 0.3 * float((pts.max(axis=0) - pts.min(axis=0)).min()))
+        xy = np.asarray([c.centre[:2] for c in contacts], dtype=float)
+        mid = xy.mean(axis=0)
+        _, _, vt = np.linalg.svd(xy - mid, full_matrices=False)
+        half = np.abs((xy - mid) @ vt.T).max(axis=0) - self.rho
+        reach = np.maximum(self.params.top_spread * half, 0.001)
         top = float(self.world.hint.hi[2]) + self.rho + self.params.approach_margin
-        start = (float(xy[0]), float(xy[1]), top)
+        start = (float(mid[0]), float(mid[1]), top)
         if not self.world.workspace.contains(start):
             return
         m = self._move(start, -_Z, top - self.rho)
@@ -551,23 +834,96 @@ class Controller:
             self._note(f"the approach from above at {_fmt(start)} found nothing ({m.event})")
             return
         f = self._follow(m.closed)
-        touch = self._record(m, f, "touch")
+        first = len(self.contacts)
+        self._record(m, f, "touch")
         pos = np.asarray(m.end, dtype=float)
+        a1 = np.array([vt[0, 0], vt[0, 1], 0.0])
+        a2 = np.array([vt[1, 0], vt[1, 1], 0.0])
+        r1, r2 = float(reach[0]), float(reach[1])
         moved = 0.0
-        slides: list[Contact] = []
-        for direction in (np.array([1.0, 0.0, 0.0]), np.array([0.0, 1.0, 0.0])):
-            sm = self._slide(pos, direction, spread, f.sensor)
-            moved += sm.distance
+        # out to the first corner of a diamond on the principal axes, then round it: the
+        # diamond lies inside the top whenever its four corners do (the top is convex)
+        corners = [a1 * r1, a2 * r2, -a1 * r1, -a2 * r2, a1 * r1]
+        legs = [(a1, r1)] + [
+            (_unit(b - a), float(np.linalg.norm(b - a))) for a, b in itertools.pairwise(corners)
+        ]
+        for direction, length in legs:
+            sm, travelled = self._slide_sampled(pos, direction, f, length)
+            moved += travelled
             pos = np.asarray(sm.end, dtype=float)
-            if sm.distance > 1e-4:
-                slides.append(self._record(sm, f, "slide"))
+            if travelled > 1e-6:
+                self._record(sm, f, "slide")
             if sm.event != "none":
                 break
-        if moved <= 1e-4:
-            self.contacts.remove(touch)
-            for c in slides:
-                self.contacts.remove(c)
+        if moved < self.edge_slide:
+            del self.contacts[first:]
             self._note(f"the touch from above at {_fmt(m.end)} is an apex or an edge: not a plane")
+
+
+@dataclass
+class _Segment:
+    """A surface slid along in a layer: its sensors, where the slide began, its direction."""
+
+    group: frozenset[int]
+    start: FArray
+    direction: FArray
+    length: float
+    r0: FArray
+    edge: bool = False
+
+
+@dataclass
+class _EdgeTouches:
+    """The verdicts on a layer's touches: edges (to drop) or surfaces.
+
+    Edge touches are dropped once a touch turns out to be a surface, unless they came in a run
+    of :data:`CURVED_RUN` or more: a curved surface is all edges to a sliding tip, and is kept.
+    """
+
+    run: list[tuple[int, _Segment | None]] = field(default_factory=list)
+    dropped: list[int] = field(default_factory=list)
+
+    def edge(self, index: int, segment: _Segment | None) -> None:
+        self.run.append((index, segment))
+        curved = len(self.run) >= CURVED_RUN
+        for _, seg in self.run:
+            if seg is not None:
+                seg.edge = not curved
+
+    def surface(self) -> None:
+        if len(self.run) < CURVED_RUN:
+            self.dropped += [index for index, _ in self.run]
+        self.run = []
+
+    def final(self) -> list[int]:
+        """The indices of the contacts to drop (the layer is over)."""
+        self.surface()
+        return self.dropped
+
+
+def _exit(point: FArray, direction: FArray, lo: FArray, hi: FArray) -> float:
+    """How far from ``point`` along horizontal unit ``direction`` the box ``lo``–``hi`` ends (x, y)."""
+    t = math.inf
+    for k in range(2):
+        if direction[k] > 1e-12:
+            t = min(t, (hi[k] - point[k]) / direction[k])
+        elif direction[k] < -1e-12:
+            t = min(t, (lo[k] - point[k]) / direction[k])
+    return max(t, 0.0) if math.isfinite(t) else 0.0
+
+
+def _radius(contacts: Sequence[Contact]) -> float:
+    """Mean horizontal distance of the contacts' tip centres from their mean."""
+    xy = np.asarray([c.centre[:2] for c in contacts], dtype=float)
+    return float(np.linalg.norm(xy - xy.mean(axis=0), axis=1).mean())
+
+
+def _centre(contacts: Sequence[Contact]) -> FArray | None:
+    """The mean tip centre of ``contacts`` (None without any)."""
+    if not contacts:
+        return None
+    centre: FArray = np.asarray([c.centre for c in contacts], dtype=float).mean(axis=0)
+    return centre
 
 
 def _fmt(p: Sequence[float]) -> str:

@@ -39,33 +39,69 @@ Examples
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+from collections.abc import Iterator, Sequence
 from typing import Any
 
 import numpy as np
 import trimesh
 from numpy.typing import NDArray
+from scipy.spatial import cKDTree
 
 from tactile_kb.errors import UsageError
 from tactile_kb.explorers import WorldExplorer
 from tactile_kb.finger import Finger
 from tactile_kb.world import CONTACT_TOL, Box, Event, Motion, MotionKind, Vec3, Workspace
 
-__all__ = ["BLOCK_TOL", "StepperExplorer", "StepperWorld", "default_workspace"]
+__all__ = [
+    "BLOCK_TOL",
+    "SAME_CONTACT_DEG",
+    "StepperExplorer",
+    "StepperWorld",
+    "default_workspace",
+]
 
 BLOCK_TOL = 1e-9
 """Metres: the tip is blocked where its distance to the mesh would drop below ρ − BLOCK_TOL."""
 
 _NUDGE = 1e-8  # how far past a change the motion stops, so the new state holds at the end
 _EPS_T = 1e-12
+_BATCH = 48  # sensor states evaluated together along a motion
+
+SAME_CONTACT_DEG = 1.0
+"""Degrees: a contact on a triangle's side this close in direction to a contact inside a face
+is the same contact (see :meth:`StepperWorld._touching`)."""
 
 FArray = NDArray[np.float64]
 
 
-def _closest(triangles: FArray, points: FArray) -> FArray:
-    """The closest point of each triangle to the matching point (trimesh, vectorised)."""
-    out: FArray = trimesh.triangles.closest_point(triangles, points)  # type: ignore[no-untyped-call]
-    return out
+def _closest(
+    tri: FArray, normals: FArray, sides: FArray, points: FArray
+) -> tuple[FArray, NDArray[np.bool_]]:
+    """The closest point of each triangle (K, 3, 3) to the matching point (K, 3), and whether
+    it lies inside the triangle (not on a side).
+
+    ``normals`` (K, 3) are the triangles' unit normals and ``sides`` (K, 3, 3) their inward side
+    normals ``n × (v[k+1] − v[k])``. The closest point is the projection onto the triangle's
+    plane when it falls inside the triangle, else the nearest point of its three sides (the
+    same points as ``trimesh.triangles.closest_point``, which does not say which case it was).
+    """
+    v0 = tri[:, 0]
+    proj = points - np.einsum("ij,ij->i", points - v0, normals)[:, None] * normals
+    inside = np.ones(len(points), dtype=bool)
+    best = np.full(len(points), np.inf)
+    edge_q = np.zeros_like(points)
+    for k in range(3):
+        a = tri[:, k]
+        ab = tri[:, (k + 1) % 3] - a
+        inside &= np.einsum("ij,ij->i", sides[:, k], proj - a) >= 0.0
+        t = np.clip(np.einsum("ij,ij->i", points - a, ab) / np.einsum("ij,ij->i", ab, ab), 0, 1)
+        q = a + t[:, None] * ab
+        d = np.einsum("ij,ij->i", points - q, points - q)
+        closer = d < best
+        best = np.where(closer, d, best)
+        edge_q = np.where(closer[:, None], q, edge_q)
+    out: FArray = np.where(inside[:, None], proj, edge_q)
+    return out, inside
 
 
 def default_workspace(bounds: FArray, radius: float) -> Workspace:
@@ -132,6 +168,11 @@ class StepperWorld:
         keep = lengths > 1e-18
         self._tri, normals, lengths = self._tri[keep], normals[keep], lengths[keep]
         self._n = normals / lengths[:, None]
+        # bounding spheres of the triangles: a conservative pre-filter for closest points
+        self._tc = self._tri.mean(axis=1)
+        self._tr = np.linalg.norm(self._tri - self._tc[:, None, :], axis=2).max(axis=1)
+        self._tr_max = float(self._tr.max()) if len(self._tr) else 0.0
+        self._tree = cKDTree(self._tc)
         # inward side normals of each triangle: n × (vj − vi)
         self._side_m = np.stack(
             [np.cross(self._n, self._tri[:, (k + 1) % 3] - self._tri[:, k]) for k in range(3)],
@@ -170,18 +211,43 @@ class StepperWorld:
         return self._hint
 
     # sensing ------------------------------------------------------------------------------------
-    def _contacts(self, p: FArray) -> FArray:
-        """Unit directions from ``p`` to every triangle within ρ + CONTACT_TOL, (k, 3)."""
-        pts = np.broadcast_to(p, (len(self._tri), 3))
-        q = _closest(self._tri, pts)
-        d = q - p
+    def _touching(self, pts: FArray) -> tuple[NDArray[np.intp], FArray]:
+        """The contacts of the tip centres ``pts`` (P, 3): point indices and unit directions.
+
+        One direction per triangle within ρ + CONTACT_TOL, towards its closest point, except
+        a closest point on a triangle's side whose direction repeats (within
+        :data:`SAME_CONTACT_DEG`) that of a contact inside a face: the contact shell's
+        tolerance would otherwise let the neighbouring triangle of the same plane turn the
+        direction by up to 0.25° and make a sensor at the edge of its cone flicker.
+        """
+        r = self._rho + CONTACT_TOL
+        found = self._tree.query_ball_point(pts, r + self._tr_max + 1e-9)
+        pi = np.repeat(np.arange(len(pts)), [len(f) for f in found])
+        ti = np.fromiter((t for f in found for t in f), dtype=np.intp, count=len(pi))
+        if len(pi):  # bounding spheres: a triangle further than its radius + r cannot touch
+            near = np.linalg.norm(pts[pi] - self._tc[ti], axis=1) - self._tr[ti] <= r + 1e-9
+            pi, ti = pi[near], ti[near]
+        if len(pi) == 0:
+            return pi, np.zeros((0, 3))
+        q, inside = _closest(self._tri[ti], self._n[ti], self._side_m[ti], pts[pi])
+        d = q - pts[pi]
         dist = np.linalg.norm(d, axis=1)
-        near = dist <= self._rho + CONTACT_TOL
-        if not near.any():
-            return np.zeros((0, 3))
-        dd, nn = d[near], dist[near]
-        good = nn > 1e-12
-        return np.asarray(dd[good] / nn[good, None], dtype=float)
+        ok = (dist <= r) & (dist > 1e-12)
+        pi, inside = pi[ok], inside[ok]
+        u = d[ok] / dist[ok, None]
+        side = np.flatnonzero(~inside)
+        face = np.flatnonzero(inside)
+        if len(side) and len(face):
+            same = pi[side][:, None] == pi[face][None, :]
+            close = u[side] @ u[face].T >= math.cos(math.radians(SAME_CONTACT_DEG))
+            keep = np.ones(len(pi), dtype=bool)
+            keep[side[(same & close).any(axis=1)]] = False
+            pi, u = pi[keep], u[keep]
+        return pi, u
+
+    def _contacts(self, p: FArray) -> FArray:
+        """Unit directions from ``p`` to the surface within ρ + CONTACT_TOL, (k, 3)."""
+        return self._touching(np.asarray(p, dtype=float).reshape(1, 3))[1]
 
     def _fired(self, p: FArray) -> tuple[int, ...]:
         d = self._contacts(p)
@@ -190,6 +256,14 @@ class StepperWorld:
         cos = d @ self._dirs.T
         return tuple(int(i) for i in np.flatnonzero((cos >= self._cos - 1e-12).any(axis=0)))
 
+    def _fired_many(self, pts: FArray) -> NDArray[np.bool_]:
+        """(P, S) bool: sensor ``s`` is ON with the tip centre at ``pts[p]`` (as :meth:`_fired`)."""
+        out = np.zeros((len(pts), len(self._dirs)), dtype=bool)
+        pi, u = self._touching(pts)
+        if len(pi):
+            np.logical_or.at(out, pi, u @ self._dirs.T >= self._cos - 1e-12)
+        return out
+
     def sense(self, centre: Vec3) -> tuple[int, ...]:
         """Sensors ON with the tip centre at ``centre``."""
         return self._fired(np.asarray(centre, dtype=float))
@@ -197,7 +271,7 @@ class StepperWorld:
     def distance(self, centre: Vec3) -> float:
         """Distance from ``centre`` to the mesh surface (for tests and diagnostics)."""
         p = np.asarray(centre, dtype=float)
-        q = _closest(self._tri, np.broadcast_to(p, (len(self._tri), 3)))
+        q, _ = _closest(self._tri, self._n, self._side_m, np.tile(p, (len(self._tri), 1)))
         return float(np.linalg.norm(q - p, axis=1).min())
 
     # interval algebra ---------------------------------------------------------------------------
@@ -329,6 +403,22 @@ class StepperWorld:
             return _v3(p + self._rng.normal(0.0, self.noise, 3))
         return _v3(p)
 
+    def _changes(
+        self, a: FArray, u: FArray, marks: FArray, fired0: tuple[int, ...]
+    ) -> Iterator[int]:
+        """Indices ``i`` of the gaps ``marks[i]..marks[i+1]`` whose middle state differs from
+        ``fired0``, in order (the sensors are evaluated in batches)."""
+        ref = np.zeros(len(self._dirs), dtype=bool)
+        ref[list(fired0)] = True
+        width = np.diff(marks)
+        gaps = np.flatnonzero(width > 0)
+        for k in range(0, len(gaps), _BATCH):
+            idx = gaps[k : k + _BATCH]
+            mid = 0.5 * (marks[idx] + marks[idx + 1])
+            states = self._fired_many(a[None, :] + mid[:, None] * u[None, :])
+            for j in np.flatnonzero((states != ref[None, :]).any(axis=1)):
+                yield int(idx[j])
+
     def _run(self, kind: MotionKind, start: Vec3, direction: Vec3, length: float) -> Motion:
         a = np.asarray(start, dtype=float)
         u = np.asarray(direction, dtype=float)
@@ -348,14 +438,12 @@ class StepperWorld:
         lo, hi = self._intervals(a, u, self._rho + CONTACT_TOL)
         ends = np.concatenate([lo, hi])
         cand = np.unique(ends[(ends > _EPS_T) & (ends < end_t)])
-        marks = [0.0, *cand.tolist(), end_t]
+        marks = np.array([0.0, *cand.tolist(), end_t])
         event: Event = "none"
         stop = end_t
         fired = fired0
-        for i in range(len(marks) - 1):
-            t0, t1 = marks[i], marks[i + 1]
-            if t1 - t0 <= 0:
-                continue
+        for i in self._changes(a, u, marks, fired0):
+            t0, t1 = float(marks[i]), float(marks[i + 1])
             state = self._fired(a + 0.5 * (t0 + t1) * u)
             if state != fired0:
                 stop = t0 + min(_NUDGE, 0.5 * (t1 - t0))

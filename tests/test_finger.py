@@ -31,9 +31,11 @@ def test_builtin_layouts() -> None:
         builtin_finger("7")
 
 
-@given(st.floats(-math.pi / 2, 0.0), st.floats(0.0, 2 * math.pi))
+@given(st.floats(-math.pi / 2, math.radians(20.0)), st.floats(0.0, 2 * math.pi))
 @settings(max_examples=60, deadline=None)
-def test_every_lower_hemisphere_direction_fires_on_the_33_finger(elev: float, az: float) -> None:
+def test_every_direction_up_to_20_degrees_above_the_equator_fires_on_the_33_finger(
+    elev: float, az: float
+) -> None:
     d = (math.cos(elev) * math.cos(az), math.cos(elev) * math.sin(az), math.sin(elev))
     f = builtin_finger("33")
     fired = f.fired([d])
@@ -98,6 +100,15 @@ def test_coverage_of_the_builtin_layouts() -> None:
     assert c33.complete
     assert c33.max_error_deg <= builtin_finger("33").cone_deg
     assert 20.0 < c33.covering_radius_deg < 21.0
+    # faces overhanging by up to 20° (an octahedron's lower faces: 19.47°) are felt at any
+    # heading: ground truth, the equator sensors are 30° apart and their cones 25° wide, so a
+    # direction e above the equator, 15° off two sensors, fires when cos e cos 15° >= cos 25°
+    limit = math.degrees(math.acos(math.cos(math.radians(25)) / math.cos(math.radians(15))))
+    assert 20.0 < limit < 20.5
+    assert coverage(builtin_finger("33"), max_elevation_deg=20.0).complete
+    up = coverage(builtin_finger("33"), max_elevation_deg=22.0)
+    assert not up.complete
+    assert all(20.0 <= elev <= 22.5 for elev, _az, _size in up.gaps)
     c4 = coverage(builtin_finger("4"))
     assert not c4.complete
     # the 4-sensor finger feels only near the equator: straight down is in the gap

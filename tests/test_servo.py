@@ -232,3 +232,65 @@ def test_motion_budget_ends_the_exploration_with_a_note() -> None:
 def test_bad_parameters(kwargs: dict[str, float]) -> None:
     with pytest.raises(UsageError):
         ServoParams(**kwargs)  # type: ignore[arg-type]
+
+
+def test_a_touch_that_rolls_off_at_once_is_an_edge_and_is_dropped() -> None:
+    world = ScriptedWorld(
+        deque(
+            [
+                ("touch", 0.02, (0,)),  # the approach meets a vertical edge
+                ("release", 0.001, ()),  # its slide rolls off within edge_slide: an edge
+                ("none", 1.0, ()),  # l1
+                ("touch", 0.004, (3,)),  # l2 meets a face
+                ("release", 0.03, ()),  # which slides like a surface
+                ("none", 1.0, ()),
+                ("none", 1.0, ()),
+                ("none", 1.0, ()),
+            ]
+        )
+    )
+    c = run(world)
+    assert [(x.kind, x.sensor) for x in c.contacts] == [("touch", 3), ("slide", 3)]
+    assert c.record(complete=True).touches == 1
+
+
+def test_edge_touches_in_a_row_are_a_curved_surface_and_are_kept() -> None:
+    steps: list[tuple[Event, float, tuple[int, ...]]] = [("touch", 0.02, (0,))]
+    for sensor in (3, 2):
+        steps += [("release", 0.001, ()), ("none", 1.0, ()), ("touch", 0.004, (sensor,))]
+    steps += [("release", 0.001, ()), ("none", 1.0, ()), ("none", 1.0, ()), ("none", 1.0, ())]
+    c = run(ScriptedWorld(deque(steps)))
+    assert [(x.kind, x.sensor) for x in c.contacts] == [("touch", 0), ("touch", 3), ("touch", 2)]
+
+
+def test_z_increment_steps_round_an_overhanging_face() -> None:
+    world = ScriptedWorld(
+        deque(
+            [
+                ("blocked", 0.0, (0,)),  # going up: the face overhangs
+                ("none", 1.0, ()),  # step away from it
+                ("none", 1.0, ()),  # up
+                ("touch", 0.01, (0,)),  # back towards the middle of the layer: touched
+            ]
+        ),
+        fired_now=(0,),
+    )
+    c = Controller(world, P)
+    pos = np.array([-0.055, 0.0, 0.03])
+    nxt = c._z_increment(pos, c._follow((0,)), np.array([0.0, 0.0, 0.03]))
+    assert nxt is not None
+    dirs = [_dir(k) for k in world.calls]
+    assert dirs[0] == (0.0, 0.0, 1.0)
+    assert dirs[1] == (-1.0, 0.0, 0.0)  # away from the face (sensor 0 points +x)
+    assert world.calls[1].length > 0.6 * c.z_step  # clears an overhang of 31°
+    assert dirs[2] == (0.0, 0.0, 1.0)
+    assert world.calls[2].length == pytest.approx(c.z_step)
+    assert dirs[3] == (1.0, 0.0, 0.0)  # towards the middle
+    assert nxt[0][2] == pytest.approx(0.03 + c.z_step)
+    assert c.contacts[-1].kind == "touch"
+
+
+def test_new_parameters_are_checked() -> None:
+    for kwargs in ({"spacing": 0.0}, {"edge_slide": -1.0}, {"top_spread": 1.0}):
+        with pytest.raises(UsageError):
+            ServoParams(**kwargs)  # type: ignore[arg-type]

@@ -270,3 +270,54 @@ def test_a_hexahedron_is_explored_fast_with_few_touches() -> None:
     phases = rec.contacts_per_phase
     assert phases["first-contact"] == 1
     assert phases["top"] >= 1
+
+
+@given(st.integers(0, 2**32 - 1))
+@settings(max_examples=20, deadline=None)
+def test_closest_points_are_those_of_trimesh(seed: int) -> None:
+    from tactile_kb.stepper import _closest
+
+    rng = np.random.default_rng(seed)
+    tri = rng.normal(size=(200, 3, 3))
+    pts = rng.normal(size=(200, 3)) * 2.0
+    n = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
+    n /= np.linalg.norm(n, axis=1)[:, None]
+    sides = np.stack([np.cross(n, tri[:, (k + 1) % 3] - tri[:, k]) for k in range(3)], axis=1)
+    got, inside = _closest(tri, n, sides, pts)
+    want = trimesh.triangles.closest_point(tri, pts)  # type: ignore[no-untyped-call]
+    assert np.allclose(got, want, atol=1e-12)
+    # inside: the closest point is the projection onto the plane
+    proj = pts - np.einsum("ij,ij->i", pts - tri[:, 0], n)[:, None] * n
+    assert np.allclose(got[inside], proj[inside], atol=1e-12)
+
+
+def test_a_face_at_a_cone_edge_does_not_flicker_where_its_triangles_meet() -> None:
+    # the face x = 0.05 of a cube turned by -25.08°: its contact direction lies 25.08° from
+    # the equator sensor at 180°, just outside that sensor's 25° cone; sliding along it must
+    # not close that sensor where the face's two triangles meet
+    mesh = solids.rotate_about_z(cube(), -25.08, about=(0.0, 0.0))
+    world = StepperWorld(mesh, builtin_finger("33"))
+    n = np.array([math.cos(math.radians(-25.08)), math.sin(math.radians(-25.08)), 0.0])
+    t = np.array([-n[1], n[0], 0.0])
+    start = n * 0.2 + np.array([0.0, 0.0, 0.03]) - t * 0.04
+    m = world.move(tuple(start), tuple(-n), 0.3)
+    assert m.event == "touch"
+    s = world.slide(m.end, tuple(t), 0.2, m.closed[0])
+    # no change of sensors before the far end of the face (0.09 m away), where the tip rolls
+    # over its edge
+    assert s.distance == pytest.approx(0.09, abs=0.003)
+
+
+def test_every_face_of_an_octahedron_has_tip_centres_at_two_heights() -> None:
+    mesh = solids.rotate_about_z(solids.octahedron(0.04), 20.0)
+    rec = StepperExplorer().explore(mesh, finger="33", seed=0)
+    centres = np.asarray([c.centre for c in rec.contacts])
+    for n, d in _true_faces(mesh):
+        if n[2] < -0.99:
+            continue  # the table
+        on = np.abs(centres @ n - d - RHO) < 1e-6
+        heights = np.unique(np.round(centres[on, 2], 4))
+        if n[2] > 0.99:
+            assert on.sum() >= 3  # the top, from above
+        else:
+            assert len(heights) >= 2, f"face {np.round(n, 3)} felt at heights {heights}"
