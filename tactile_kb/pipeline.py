@@ -76,8 +76,7 @@ class Classification:
     @property
     def reported(self) -> dict[str, float | int | None]:
         """The measures the decided class reports (its ``report:`` list in the rule file)."""
-        cls = next((c for c in self.rules.classes if c.id == self.decision.label), None)
-        return {name: measure(self.model, name) for name in (cls.report if cls else ())}
+        return {name: measure(self.model, name) for name in _reports(self.rules, self.decision)}
 
     @property
     def answer(self) -> str:
@@ -103,6 +102,12 @@ class Classification:
             "reported": self.reported,
             "measures": self.measures,
         }
+
+
+def _reports(rules: RuleSet, decision: Decision) -> tuple[str, ...]:
+    """The measures the decided class reports; none for ``otherwise`` and contradictions."""
+    ids = {c.id for c in rules.classes}
+    return rules.rule_class(decision.label).report if decision.label in ids else ()
 
 
 def _fmt(value: float | int | None) -> str:
@@ -264,8 +269,7 @@ def classify(
     decision, per_phase = _decide(kb, evidence)
     # Explore no further than the decision needed, unless its class reports measures of the
     # whole object (the n of a prism): those need the complete model.
-    cls = next((c for c in kb.rules.classes if c.id == decision.label), None)
-    model = evidence.model("complete" if cls is not None and cls.report else "contact")
+    model = evidence.model("complete" if _reports(kb.rules, decision) else "contact")
     record = evidence.record
     seconds = time.perf_counter() - t0
     return Classification(object_name(obj), decision, record, model, seconds, kb.rules, per_phase)
