@@ -43,7 +43,7 @@ def register(sub: argparse._SubParsersAction[Any]) -> None:
     )
     add_exploration_options(p)
     p.add_argument("--json", action="store_true", help="one JSON object per line and per object")
-    p.add_argument("--plot", metavar="FILE", help="draw what the finger found (PNG or SVG)")
+    p.add_argument("--plot", metavar="FILE", help="draw what the finger found (.png, .svg or .pdf)")
     p.set_defaults(func=_classify)
 
     p = sub.add_parser("explore", help="explore one object and save the record")
