@@ -40,7 +40,7 @@ from typing import TYPE_CHECKING, Any, Literal, Protocol, runtime_checkable
 
 from tactile_kb.errors import PluginError, UsageError
 from tactile_kb.finger import Finger, load_finger
-from tactile_kb.objects import ObjectLike, load_object, object_name
+from tactile_kb.objects import ObjectLike, check_thickness, load_object, object_name
 from tactile_kb.plugins import Registry
 from tactile_kb.record import ExplorationRecord
 
@@ -193,6 +193,7 @@ class WorldExplorer(abc.ABC):
             raise UsageError(f"seed must be a whole number ≥ 0 or None, got {seed!r}")
         mesh = load_object(obj)
         f = load_finger(finger)
+        check_thickness(mesh, f.radius, name=object_name(obj))
         world = self.make_world(mesh, f, seed=seed, noise=noise)
         controller = Controller(
             world,

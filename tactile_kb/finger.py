@@ -38,16 +38,17 @@ import math
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Annotated
+from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 from pydantic import BaseModel, ConfigDict, Field, field_validator
 
 from tactile_kb.errors import LayoutFileError, Problem, UsageError
-from tactile_kb.yaml_source import format_path, load_yaml, validate
+from tactile_kb.yaml_source import Source, format_path, load_yaml, validate
 
 __all__ = [
+    "ALIGN_4_DEG",
     "BUILTIN_LAYOUTS",
     "DEFAULT_TIP_RADIUS",
     "Coverage",
@@ -64,8 +65,19 @@ DEFAULT_TIP_RADIUS = 0.005
 """ρ for the built-in layouts: a 5 mm hemispherical tip (objects of 2–30 cm)."""
 
 
+ALIGN_4_DEG = 10.0
+"""Degrees: the 4-sensor finger is meant for surfaces facing its sensors (axis-aligned objects
+made of rectangular parallelepipeds); a surface turned further from its sensor is reported."""
+
+
 class Finger(BaseModel):
-    """A tip of ``radius`` metres with sensors at unit ``directions``."""
+    """A tip of ``radius`` metres with sensors at unit ``directions``.
+
+    ``align_deg`` says which surfaces the layout is meant for: with a value, a surface whose
+    normal lies further than that from the sensor that fires for it (an object turned away
+    from the sensors of a sparse layout) stops the exploration with an
+    :class:`~tactile_kb.errors.ExplorationError` instead of being recorded as a wrong plane.
+    """
 
     model_config = ConfigDict(frozen=True, extra="forbid")
 
@@ -73,6 +85,13 @@ class Finger(BaseModel):
     radius: float = Field(default=DEFAULT_TIP_RADIUS, gt=0.0, description="ρ, metres")
     directions: tuple[Vec3, ...] = Field(description="unit sensor directions, tip centre outwards")
     cone_deg: float = Field(gt=0.0, lt=90.0, description="half-angle of each acceptance cone")
+    align_deg: float | None = Field(
+        default=None,
+        gt=0.0,
+        lt=90.0,
+        description="the largest angle between a felt surface's normal and its sensor that the "
+        "layout is meant for (None: any within the cone)",
+    )
 
     @field_validator("directions")
     @classmethod
@@ -121,7 +140,7 @@ def _ring(elevation_deg: float, count: int, phase_deg: float = 0.0) -> list[Vec3
 
 
 def _layout_4() -> Finger:
-    return Finger(name="4", directions=tuple(_ring(0.0, 4)), cone_deg=46.0)
+    return Finger(name="4", directions=tuple(_ring(0.0, 4)), cone_deg=46.0, align_deg=ALIGN_4_DEG)
 
 
 def _layout_33() -> Finger:
@@ -150,15 +169,8 @@ def builtin_finger(name: str, *, radius: float | None = None) -> Finger:
 # --- custom layouts from YAML ----------------------------------------------------------------
 
 
-class _Angles(BaseModel):
-    model_config = ConfigDict(extra="forbid")
-
-    elevation: float = Field(ge=-90.0, le=90.0, description="degrees above the equator")
-    azimuth: float = Field(description="degrees from +x towards +y")
-
-
 class _Ring(BaseModel):
-    model_config = ConfigDict(extra="forbid")
+    model_config = ConfigDict(extra="forbid", allow_inf_nan=False)
 
     elevation: float = Field(ge=-90.0, le=90.0)
     count: int = Field(ge=1, le=360)
@@ -166,76 +178,147 @@ class _Ring(BaseModel):
 
 
 class _LayoutFile(BaseModel):
-    model_config = ConfigDict(extra="forbid")
+    model_config = ConfigDict(extra="forbid", allow_inf_nan=False)
 
     name: str = Field(min_length=1)
     description: str = ""
     radius: float = Field(default=DEFAULT_TIP_RADIUS, gt=0.0, le=0.1)
     cone_deg: float = Field(gt=0.0, lt=90.0)
-    sensors: list[Annotated[list[float], Field(min_length=3, max_length=3)] | _Angles] = Field(
-        default_factory=list
-    )
+    align_deg: float | None = Field(default=None, gt=0.0, lt=90.0)
+    sensors: list[Any] = Field(default_factory=list)  # each entry checked by _sensor()
     rings: list[_Ring] = Field(default_factory=list)
+
+
+_SENSOR_FORM = "a sensor is [x, y, z] or {elevation: degrees, azimuth: degrees}"
+
+
+def _number(src: Source, path: tuple[str | int, ...], value: Any, what: str) -> Problem | float:
+    """``value`` as a finite float, or the problem located at ``path``."""
+    if isinstance(value, bool) or not isinstance(value, int | float):
+        return src.problem(path, f"{what} must be a number, got {value!r}")
+    if not math.isfinite(value):
+        return src.problem(path, f"{what} is not finite ({value})")
+    return float(value)
+
+
+def _sensor(src: Source, i: int, item: Any) -> list[Problem] | Vec3:
+    """One ``sensors`` entry as a unit direction, or its problems (each at its own column)."""
+    where: tuple[str | int, ...] = ("sensors", i)
+    if isinstance(item, list):
+        if len(item) != 3:
+            return [
+                src.problem(where, f"a sensor direction needs 3 numbers [x, y, z], got {len(item)}")
+            ]
+        out: list[float] = []
+        problems: list[Problem] = []
+        for j, (axis, value) in enumerate(zip("xyz", item, strict=True)):
+            got = _number(src, (*where, j), value, axis)
+            if isinstance(got, Problem):
+                problems.append(got)
+            else:
+                out.append(got)
+        if problems:
+            return problems
+        n = math.sqrt(sum(c * c for c in out))
+        if n < 1e-9:
+            return [src.problem(where, "a sensor direction needs a non-zero length")]
+        return (out[0] / n, out[1] / n, out[2] / n)
+    if isinstance(item, dict):
+        problems = [
+            src.problem((*where, k), f"unknown field ({_SENSOR_FORM})", key=True)
+            for k in item
+            if k not in ("elevation", "azimuth")
+        ]
+        angles: dict[str, float] = {}
+        for k in ("elevation", "azimuth"):
+            if k not in item:
+                problems.append(src.problem(where, f"a sensor given by angles needs {k}"))
+                continue
+            got = _number(src, (*where, k), item[k], k)
+            if isinstance(got, Problem):
+                problems.append(got)
+            elif k == "elevation" and not -90.0 <= got <= 90.0:
+                problems.append(
+                    src.problem((*where, k), f"elevation must lie in [-90, 90], got {got:g}")
+                )
+            else:
+                angles[k] = got
+        if problems:
+            return problems
+        return _ring(angles["elevation"], 1, angles["azimuth"])[0]
+    return [src.problem(where, f"{_SENSOR_FORM}, got {item!r}")]
 
 
 def load_layout(source: str | Path, *, file: str | None = None) -> Finger:
     """A finger layout from a YAML file (a ``Path``) or YAML text (a ``str``).
 
     The file gives ``name``, ``cone_deg`` (half-angle of every acceptance cone), optionally
-    ``radius`` (ρ, metres, default 0.005) and ``description``, and the sensors: ``sensors``, a
+    ``radius`` (ρ, metres, default 0.005), ``align_deg`` (see :class:`Finger`) and
+    ``description``, and the sensors: ``sensors``, a
     list of unit vectors ``[x, y, z]`` (tip centre outwards; normalised on load) or
     ``{elevation, azimuth}`` in degrees, and/or ``rings``, each ``{elevation, count, phase}``
-    (``count`` sensors evenly spaced in azimuth starting at ``phase``). Every problem is
-    reported with its ``file:line:column`` in one :class:`~tactile_kb.errors.LayoutFileError`.
+    (``count`` sensors evenly spaced in azimuth starting at ``phase``). Every problem of the
+    file (duplicate keys, wrong fields, bad sensor entries, repeated directions) is reported
+    at once with its ``file:line:column`` in one :class:`~tactile_kb.errors.LayoutFileError`.
+
+    Examples
+    --------
+    >>> load_layout("name: x\\ncone_deg: 30\\nsensors:\\n  - [1, 0, .inf]\\n", file="f.yaml")
+    Traceback (most recent call last):
+    ...
+    tactile_kb.errors.LayoutFileError: f.yaml:4:12: sensors[0][2]: z is not finite (inf)
     """
-    src = load_yaml(source, file=file, error_cls=LayoutFileError)
+    src = load_yaml(source, file=file, error_cls=LayoutFileError, keep_going=True)
+    problems: list[Problem] = list(src.problems)
+
+    def fail() -> LayoutFileError:
+        first = min(problems, key=lambda p: (p.line, p.column))
+        return LayoutFileError(problems, src.excerpt(first.line, first.column))
+
     if not isinstance(src.data, dict):
-        raise LayoutFileError(
-            [
-                Problem(
-                    src.file,
-                    1,
-                    1,
-                    "",
-                    "a layout file must be a mapping with name, cone_deg, sensors",
-                )
-            ]
+        problems.append(
+            Problem(
+                src.file, 1, 1, "", "a layout file must be a mapping with name, cone_deg, sensors"
+            )
         )
-    spec = validate(src, _LayoutFile, error_cls=LayoutFileError)
+        raise fail()
+    spec: _LayoutFile | None = None
+    try:
+        spec = validate(src, _LayoutFile, error_cls=LayoutFileError)
+    except LayoutFileError as exc:
+        problems += exc.problems
+    raw = spec.sensors if spec is not None else src.data.get("sensors")
     dirs: list[Vec3] = []
     origin: list[tuple[str | int, ...]] = []  # where each direction came from in the file
-    problems: list[Problem] = []
-    for i, item in enumerate(spec.sensors):
-        if isinstance(item, _Angles):
-            dirs += _ring(item.elevation, 1, item.azimuth)
-            origin.append(("sensors", i))
+    for i, item in enumerate(raw if isinstance(raw, list) else []):
+        got = _sensor(src, i, item)
+        if isinstance(got, list):
+            problems += got
             continue
-        n = math.sqrt(sum(c * c for c in item))
-        if not math.isfinite(n) or n < 1e-9:
-            problems.append(
-                src.problem(("sensors", i), "a sensor direction needs a non-zero length")
-            )
-            continue
-        dirs.append((item[0] / n, item[1] / n, item[2] / n))
+        dirs.append(got)
         origin.append(("sensors", i))
-    for r, ring in enumerate(spec.rings):
-        dirs += _ring(ring.elevation, ring.count, ring.phase)
-        origin += [("rings", r)] * ring.count
-    if not dirs and not problems:
-        problems.append(
-            src.problem(("sensors",), "a finger needs at least one sensor (sensors or rings)")
-        )
+    if spec is not None:
+        for r, ring in enumerate(spec.rings):
+            dirs += _ring(ring.elevation, ring.count, ring.phase)
+            origin += [("rings", r)] * ring.count
+        if not dirs and not problems:
+            problems.append(
+                src.problem(("sensors",), "a finger needs at least one sensor (sensors or rings)")
+            )
     seen: dict[tuple[float, float, float], tuple[str | int, ...]] = {}
     for d, where in zip(dirs, origin, strict=True):
         key = (round(d[0], 9) + 0.0, round(d[1], 9) + 0.0, round(d[2], 9) + 0.0)
         if key in seen:
             problems.append(src.problem(where, f"the same direction as {format_path(seen[key])}"))
         seen.setdefault(key, where)
-    if problems:
-        first = min(problems, key=lambda p: (p.line, p.column))
-        raise LayoutFileError(problems, src.excerpt(first.line, first.column))
+    if problems or spec is None:
+        raise fail()
     return Finger(
-        name=spec.name, radius=spec.radius, directions=tuple(dirs), cone_deg=spec.cone_deg
+        name=spec.name,
+        radius=spec.radius,
+        directions=tuple(dirs),
+        cone_deg=spec.cone_deg,
+        align_deg=spec.align_deg,
     )
 
 

@@ -19,6 +19,7 @@ Examples
 
 from __future__ import annotations
 
+import warnings
 from pathlib import Path
 from typing import Any
 
@@ -31,8 +32,10 @@ __all__ = [
     "MAX_SIZE",
     "MIN_SIZE",
     "OBJECT_SUFFIXES",
+    "THIN_FACTOR",
     "WORKSPACE_HALF_WIDTH",
     "ObjectLike",
+    "check_thickness",
     "load_object",
     "object_name",
 ]
@@ -48,6 +51,10 @@ MAX_SIZE = 0.6
 MIN_SIZE = 0.002
 """Metres: an object thinner than this in any direction is degenerate for a 5 mm tip."""
 
+THIN_FACTOR = 1.5
+"""An object must be at least this many tip radii wide in every direction (:func:`check_thickness`);
+measured: a 5 mm tip classifies a 7.5 mm plate standing on its edge, not a 7 mm one."""
+
 WORKSPACE_HALF_WIDTH = 0.5
 """Metres: every point of the object must lie within this distance of the z axis in x and y."""
 
@@ -62,20 +69,62 @@ def object_name(obj: ObjectLike) -> str:
 
 
 def _read(path: Path) -> trimesh.Trimesh:
+    """The mesh in ``path``, unprocessed (vertices are merged after the finiteness check)."""
     name = str(path)
     if not path.exists():
         raise ObjectError(f"{name}: no such file")
-    if path.suffix.lower() not in OBJECT_SUFFIXES:
+    suffix = path.suffix.lower()
+    if suffix not in OBJECT_SUFFIXES:
         known = ", ".join(OBJECT_SUFFIXES)
         raise ObjectError(f"{name}: unsupported mesh format {path.suffix!r} (use {known})")
+    unreadable = f"{name}: not a readable {suffix[1:].upper()} mesh file"
     try:
-        loaded: Any = trimesh.load(str(path), force="mesh", process=True)
-    except Exception as exc:  # trimesh raises many kinds on a bad file
-        msg = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
-        raise ObjectError(f"{name}: cannot read mesh: {msg}") from None
-    if not isinstance(loaded, trimesh.Trimesh):
-        raise ObjectError(f"{name}: cannot read mesh: no triangles found")
+        with np.errstate(all="ignore"), warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            loaded: Any = trimesh.load(str(path), force="mesh", process=False)
+    except Exception:  # trimesh and numpy raise many kinds on a bad file
+        raise ObjectError(unreadable) from None
+    if not isinstance(loaded, trimesh.Trimesh) or len(loaded.faces) == 0:
+        raise ObjectError(f"{unreadable}: no triangles found")
     return loaded
+
+
+def _min_width(mesh: trimesh.Trimesh) -> float:
+    """The smallest width of the mesh's convex hull (over the hull's face normals), metres."""
+    try:
+        hull = mesh.convex_hull
+    except Exception:  # a flat or degenerate point set: Qhull cannot build a hull
+        return 0.0
+    pts = np.asarray(hull.vertices, dtype=float)
+    normals = np.asarray(hull.face_normals, dtype=float)
+    if len(normals) == 0:
+        return 0.0
+    spans = pts @ normals.T
+    return float((spans.max(axis=0) - spans.min(axis=0)).min())
+
+
+def check_thickness(mesh: trimesh.Trimesh, tip_radius: float, *, name: str = "<mesh>") -> None:
+    """Raise :class:`~tactile_kb.errors.ObjectError` when the object is too thin for the tip.
+
+    A tip of radius ρ resolves faces only where the object is at least :data:`THIN_FACTOR` × ρ
+    wide in every direction (the width of its convex hull): a thinner plate is touched on its
+    edges only and comes out open or misclassified.
+
+    Examples
+    --------
+    >>> plate = trimesh.creation.box((0.05, 0.05, 0.004))
+    >>> check_thickness(plate, 0.005, name="plate.stl")
+    Traceback (most recent call last):
+    ...
+    tactile_kb.errors.ObjectError: plate.stl: too thin for the finger: 4 mm across at its thinnest, a tip of radius 5 mm needs at least 7.5 mm
+    """
+    width = _min_width(mesh)
+    need = THIN_FACTOR * tip_radius
+    if width < need:
+        raise ObjectError(
+            f"{name}: too thin for the finger: {width * 1000:.3g} mm across at its thinnest, "
+            f"a tip of radius {tip_radius * 1000:.3g} mm needs at least {need * 1000:.3g} mm"
+        )
 
 
 def load_object(obj: ObjectLike, *, name: str | None = None) -> trimesh.Trimesh:
@@ -91,8 +140,9 @@ def load_object(obj: ObjectLike, *, name: str | None = None) -> trimesh.Trimesh:
     Raises
     ------
     ObjectError
-        Unreadable file, empty mesh, open (not watertight) mesh, degenerate (no volume or thinner
-        than :data:`MIN_SIZE`), non-finite coordinates, or larger than the workspace.
+        Unreadable file, empty mesh, non-finite coordinates, more than one body, open (not
+        watertight) mesh, degenerate (no volume or thinner than :data:`MIN_SIZE`), or larger
+        than the workspace. The tip's own limit is :func:`check_thickness`.
     """
     label = name or object_name(obj)
     if isinstance(obj, str | Path):
@@ -105,8 +155,16 @@ def load_object(obj: ObjectLike, *, name: str | None = None) -> trimesh.Trimesh:
         )
     if len(mesh.faces) == 0 or len(mesh.vertices) == 0:
         raise ObjectError(f"{label}: the mesh is empty")
-    if not np.isfinite(mesh.vertices).all():
-        raise ObjectError(f"{label}: the mesh has non-finite vertex coordinates")
+    with np.errstate(all="ignore"):
+        finite = bool(np.isfinite(np.asarray(mesh.vertices, dtype=float)).all())
+    if not finite:
+        raise ObjectError(f"{label}: the mesh has non-finite (NaN or infinite) vertex coordinates")
+    mesh.process()
+    bodies = int(mesh.body_count)
+    if bodies > 1:
+        raise ObjectError(
+            f"{label}: the mesh holds {bodies} separate bodies; explore one object at a time"
+        )
     extent = mesh.extents
     if float(extent.min()) < MIN_SIZE:
         raise ObjectError(

@@ -54,7 +54,7 @@ from __future__ import annotations
 import itertools
 import math
 from collections.abc import Iterator, Sequence
-from dataclasses import asdict, dataclass, field
+from dataclasses import asdict, dataclass, field, replace
 from typing import Literal
 
 import numpy as np
@@ -227,6 +227,7 @@ class Controller:
         self.layers: list[Layer] = []
         self.notes: list[str] = []
         self.motions = 0
+        self.rereads = 0  # touches recovered by reading the sensors again at rest
         self._layer_motions = 0
         self._phase = "first-contact"
         self._layer: int | None = None
@@ -240,6 +241,8 @@ class Controller:
             self.notes.append(text)
 
     def _track(self, m: Motion) -> Motion:
+        if m.event in ("touch", "blocked"):
+            m = self._reread(m)
         self.motions += 1
         self._layer_motions += 1
         if self._last_pos is None or m.start != self._last_pos:
@@ -250,11 +253,54 @@ class Controller:
             raise _Budget(f"motion budget of {self.params.max_motions} exhausted")
         return m
 
+    def _reread(self, m: Motion) -> Motion:
+        """Read the sensors again where a motion stopped at a touch or blocked.
+
+        A sensor's closing signal can be lost at the event (a drop-out): the finger stops
+        pressed, blind, or follows only part of the sensors that closed together (a biased r0).
+        At rest the sensors are read again and every one that is ON now and was not at the
+        start joins the sensors that closed.
+        """
+        now = set(self.world.sense(m.end))
+        closed = now - set(m.fired_start)
+        if closed <= set(m.closed):
+            return m
+        self.rereads += 1
+        return replace(
+            m,
+            event="touch",
+            fired=tuple(sorted(now | set(m.fired))),
+            closed=tuple(sorted(closed | set(m.closed))),
+        )
+
     def _move(self, start: FArray | Vec3, direction: FArray | Vec3, length: float) -> Motion:
         return self._track(self.world.move(_v3(start), _v3(direction), float(length)))
 
     def _slide(self, start: FArray | Vec3, direction: FArray, length: float, sensor: int) -> Motion:
-        return self._track(self.world.slide(_v3(start), _v3(direction), float(length), sensor))
+        m = self._track(self.world.slide(_v3(start), _v3(direction), float(length), sensor))
+        self._check_alignment(direction, m, sensor)
+        return m
+
+    def _check_alignment(self, command: FArray, m: Motion, sensor: int) -> None:
+        """Stop when a surface slid along is turned further from its sensor than the finger's
+        ``align_deg``: the slide went along the surface, not where the sensor said it would."""
+        limit = self.finger.align_deg
+        if limit is None or m.distance < 0.2 * self.rho:  # an edge rolls off at once
+            return
+        a = np.array([command[0], command[1], 0.0])
+        b = np.array([m.direction[0], m.direction[1], 0.0])
+        na, nb = float(np.linalg.norm(a)), float(np.linalg.norm(b))
+        if na < 1e-9 or nb < 1e-9:
+            return
+        turn = math.degrees(math.acos(min(1.0, abs(float(a @ b)) / (na * nb))))
+        if turn > limit:
+            text = (
+                f"the surface at {_fmt(m.start)} is turned {turn:.0f}° from sensor {sensor} of "
+                f"finger {self.finger.name!r} (at most {limit:g}° expected): this finger explores "
+                "objects whose faces face its sensors; turn the object or use finger '33'"
+            )
+            self._note(text)
+            raise ExplorationError(text)
 
     def _follow(self, closed: Sequence[int]) -> _Follow:
         """The contact to follow among sensors that closed together (overlapping cones)."""
@@ -311,7 +357,12 @@ class Controller:
             layers=list(self.layers),
             contacts_per_phase=per_phase,
             complete=complete,
-            notes=list(self.notes),
+            notes=list(self.notes)
+            + (
+                [f"{self.rereads} lost sensor signal(s) recovered by reading the sensors at rest"]
+                if self.rereads
+                else []
+            ),
         )
 
     # the exploration ---------------------------------------------------------------------------

@@ -21,7 +21,8 @@ the face ends (a ``"release"`` at a convex edge) or where another face closes a 
 
 Options: ``noise`` (σ, metres, Gaussian noise on the measured tip position of every motion),
 ``dropout`` (probability that a closing sensor's signal is lost: the finger stops blind,
-``"blocked"``), ``false_fire`` (probability per motion that a random sensor fires spuriously
+``"blocked"``, or follows part of the sensors that closed; the servo recovers it by reading
+the sensors again at rest), ``false_fire`` (probability per motion that a random sensor fires spuriously
 somewhere along it) and ``seed``; the same seed and the same calls give the same answers.
 
 Examples

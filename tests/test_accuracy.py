@@ -141,3 +141,13 @@ def test_an_octahedron_is_felt_whole_at_any_turn(edge: float, angle: float) -> N
     result = classify(mesh, rules="polyhedra", seed=0)
     assert result.decision.label == "octahedron"
     assert result.planes == 8
+
+
+@pytest.mark.parametrize("seed", [0, 1, 5, 7])
+def test_a_cube_is_classified_right_despite_sensor_drop_outs(seed: int) -> None:
+    from tactile_kb.stepper import StepperExplorer
+
+    cube = _turned(solids.box(0.05, 0.05, 0.05), 20.0)
+    result = classify(cube, explorer=StepperExplorer(dropout=0.05), seed=seed)
+    assert result.decision.label == "cube"
+    assert result.record.complete

@@ -147,3 +147,67 @@ def test_located_errors() -> None:
 def test_a_finger_validates_its_directions() -> None:
     with pytest.raises(ValueError, match="at least one sensor"):
         Finger(name="none", directions=(), cone_deg=10)
+
+
+def test_every_problem_is_reported_at_once_with_its_column() -> None:
+    text = (
+        "name: x\n"  # 1
+        "name: y\n"  # 2
+        "cone_deg: 95\n"  # 3
+        "sensors:\n"  # 4
+        "  - [1, 0, .inf]\n"  # 5
+        "  - {elevation: 0, azimut: 3}\n"  # 6
+        "  - [1, 0]\n"  # 7
+        "  - [1, true, 0]\n"  # 8
+        "  - {elevation: 100, azimuth: 0}\n"  # 9
+        "  - 7\n"  # 10
+        "rings:\n"  # 11
+        "  - {elevation: .nan, count: 2}\n"  # 12
+    )
+    err = _error(text)
+    assert [str(p) for p in err.problems] == [
+        "f.yaml:2:1: name: duplicate key 'name' (first at line 1)",
+        "f.yaml:3:11: cone_deg: Input should be less than 90",
+        "f.yaml:5:12: sensors[0][2]: z is not finite (inf)",
+        "f.yaml:6:5: sensors[1]: a sensor given by angles needs azimuth",
+        "f.yaml:6:20: sensors[1].azimut: unknown field "
+        "(a sensor is [x, y, z] or {elevation: degrees, azimuth: degrees})",
+        "f.yaml:7:5: sensors[2]: a sensor direction needs 3 numbers [x, y, z], got 2",
+        "f.yaml:8:9: sensors[3][1]: y must be a number, got True",
+        "f.yaml:9:17: sensors[4].elevation: elevation must lie in [-90, 90], got 100",
+        "f.yaml:10:5: sensors[5]: a sensor is [x, y, z] or {elevation: degrees, azimuth: "
+        "degrees}, got 7",
+        "f.yaml:12:17: rings[0].elevation: Input should be a finite number",
+    ]
+    # no pydantic union noise: internal class names never reach the user
+    for noise in ("_Angles", "_Ring", "instance of"):
+        assert noise not in str(err)
+    assert err.excerpt.splitlines()[:3] == ["1 | name: x", "2 | name: y", "  | ^"]
+
+
+@pytest.mark.parametrize("bad", [".inf", "-.inf", ".nan"])
+def test_non_finite_sensor_components_say_not_finite(bad: str) -> None:
+    err = _error(f"name: x\ncone_deg: 30\nsensors:\n  - [{bad}, 0, 0]\n")
+    assert len(err.problems) == 1
+    assert str(err.problems[0]).startswith("f.yaml:4:6: sensors[0][0]: x is not finite")
+    err = _error(f"name: x\ncone_deg: 30\nsensors:\n  - {{elevation: 0, azimuth: {bad}}}\n")
+    assert str(err.problems[0]).startswith("f.yaml:4:29: sensors[0].azimuth: azimuth is not finite")
+
+
+def test_a_layout_file_on_disk_names_itself(tmp_path: Path) -> None:
+    path = tmp_path / "bad.yaml"
+    path.write_text("name: x\ncone_deg: 30\nsensors:\n  - [0, 0, 0]\n")
+    with pytest.raises(LayoutFileError) as info:
+        load_finger(path)
+    assert str(info.value) == f"{path}:4:5: sensors[0]: a sensor direction needs a non-zero length"
+
+
+def test_align_deg_says_which_surfaces_a_layout_is_for() -> None:
+    assert builtin_finger("4").align_deg == 10.0
+    assert builtin_finger("33").align_deg is None
+    f = load_layout("name: x\ncone_deg: 40\nalign_deg: 5\nrings:\n  - {elevation: 0, count: 4}\n")
+    assert f.align_deg == 5.0
+    err = _error("name: x\ncone_deg: 40\nalign_deg: 90\nsensors:\n  - [1, 0, 0]\n")
+    assert [str(p) for p in err.problems] == [
+        "f.yaml:3:12: align_deg: Input should be less than 90"
+    ]

@@ -64,14 +64,24 @@ def test_missing_and_unsupported_files(tmp_path: Path) -> None:
 def test_unreadable_file(tmp_path: Path) -> None:
     bad = tmp_path / "bad.ply"
     bad.write_bytes(b"ply\nformat nonsense\n\x00\x01garbage")
-    with pytest.raises(ObjectError, match=r"bad\.ply: cannot read mesh"):
+    with pytest.raises(ObjectError, match=r"^\S*bad\.ply: not a readable PLY mesh file$"):
         load_object(bad)
+    garbage = tmp_path / "garbage.obj"
+    garbage.write_text("v 1 2\nf a b c\nxyz\n")
+    with pytest.raises(ObjectError, match=r"^\S*garbage\.obj: not a readable OBJ mesh file"):
+        load_object(garbage)
+    text = tmp_path / "notes.stl"
+    text.write_text("hello, this is not a mesh\n")
+    with pytest.raises(
+        ObjectError, match=r"^\S*notes\.stl: not a readable STL mesh file: no triangles found$"
+    ):
+        load_object(text)
 
 
 def test_empty_mesh(tmp_path: Path) -> None:
     empty = tmp_path / "empty.obj"
     empty.write_text("# nothing\n")
-    with pytest.raises(ObjectError, match=r"empty\.obj: "):
+    with pytest.raises(ObjectError, match=r"empty\.obj: not a readable OBJ mesh file"):
         load_object(empty)
     with pytest.raises(ObjectError, match="empty"):
         load_object(trimesh.Trimesh())
@@ -103,3 +113,86 @@ def test_too_large_and_outside_the_workspace() -> None:
 def test_not_a_mesh() -> None:
     with pytest.raises(ObjectError, match="expected a trimesh"):
         load_object(42)  # type: ignore[arg-type]
+
+
+def _nan_cube_text(bad: str) -> str:
+    return f"v {bad} 0 0\nv 0.05 0 0\nv 0 0.05 0\nv 0 0 0.05\nf 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n"
+
+
+@pytest.mark.parametrize("bad", ["nan", "inf", "-inf"])
+def test_non_finite_coordinates_are_one_line_without_numpy_warnings(
+    tmp_path: Path, bad: str
+) -> None:
+    # pytest turns warnings into errors: a RuntimeWarning from numpy would fail this test
+    path = tmp_path / "tet.obj"
+    path.write_text(_nan_cube_text(bad))
+    with pytest.raises(ObjectError) as info:
+        load_object(path)
+    assert (
+        str(info.value) == f"{path}: the mesh has non-finite (NaN or infinite) vertex coordinates"
+    )
+    good = tmp_path / "good.obj"
+    good.write_text(_nan_cube_text("0"))
+    assert load_object(good).volume == pytest.approx(0.05**3 / 6)
+    box = trimesh.creation.box((0.05, 0.05, 0.05))
+    v = box.vertices.copy()
+    v[3, 2] = float(bad)
+    with pytest.raises(ObjectError, match=r"^cube: the mesh has non-finite"):
+        load_object(trimesh.Trimesh(v, box.faces, process=False), name="cube")
+
+
+def test_two_bodies_in_one_file_are_rejected(tmp_path: Path) -> None:
+    a = trimesh.creation.box((0.05, 0.05, 0.05))
+    b = a.copy()
+    b.apply_translation((0.1, 0.0, 0.0))
+    path = tmp_path / "pair.stl"
+    trimesh.util.concatenate([a, b]).export(path)
+    with pytest.raises(ObjectError) as info:
+        load_object(path)
+    assert str(info.value) == (
+        f"{path}: the mesh holds 2 separate bodies; explore one object at a time"
+    )
+    # one body from an STL (unmerged triangle soup in the file) is one body
+    one = tmp_path / "one.stl"
+    a.export(one)
+    assert load_object(one).body_count == 1
+
+
+@pytest.mark.parametrize(
+    ("dims", "thin"),
+    [
+        ((0.05, 0.05, 0.004), True),  # a plate lying flat, 4 mm
+        ((0.006, 0.05, 0.05), True),  # a plate on its edge, 6 mm
+        ((0.0074, 0.05, 0.05), True),
+        ((0.0076, 0.05, 0.05), False),
+        ((0.03, 0.03, 0.03), False),
+    ],
+)
+def test_objects_thinner_than_the_tip_resolves_are_rejected(
+    dims: tuple[float, float, float], thin: bool
+) -> None:
+    from tactile_kb.objects import THIN_FACTOR, check_thickness
+
+    # ground truth: a box's thinnest width is its smallest side, whatever its turn
+    mesh = trimesh.creation.box(dims)
+    turn = trimesh.transformations.rotation_matrix(0.5, (0, 0, 1))  # type: ignore[no-untyped-call]
+    mesh.apply_transform(turn)
+    assert (min(dims) < THIN_FACTOR * 0.005) == thin
+    if thin:
+        with pytest.raises(ObjectError, match=r"^plate: too thin for the finger: .* 7\.5 mm$"):
+            check_thickness(mesh, 0.005, name="plate")
+    else:
+        check_thickness(mesh, 0.005, name="plate")
+    check_thickness(mesh, min(dims) / THIN_FACTOR * 0.99, name="plate")  # a finer tip
+
+
+def test_explorers_reject_thin_objects_before_exploring() -> None:
+    from tactile_kb.stepper import StepperExplorer
+
+    plate = trimesh.creation.box((0.006, 0.05, 0.05))
+    with pytest.raises(ObjectError, match="too thin for the finger"):
+        StepperExplorer().session(plate, finger="33")
+    from tactile_kb.finger import builtin_finger
+
+    fine = builtin_finger("33", radius=0.003)
+    assert StepperExplorer().session(plate, finger=fine).done is False

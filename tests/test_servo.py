@@ -294,3 +294,61 @@ def test_new_parameters_are_checked() -> None:
     for kwargs in ({"spacing": 0.0}, {"edge_slide": -1.0}, {"top_spread": 1.0}):
         with pytest.raises(UsageError):
             ServoParams(**kwargs)  # type: ignore[arg-type]
+
+
+@dataclass
+class DroppingWorld(ScriptedWorld):
+    """A scripted world whose motion number ``drop`` loses its closing signal (a drop-out):
+    the motion reports ``"blocked"`` with no sensor closed, while the sensors read at rest
+    tell the truth."""
+
+    drop: int = -1
+
+    def _answer(
+        self, kind: str, start: Vec3, direction: Vec3, length: float, sensor: int | None
+    ) -> Motion:
+        m = super()._answer(kind, start, direction, length, sensor)
+        if len(self.calls) - 1 != self.drop:
+            return m
+        return Motion(
+            kind=m.kind,
+            start=m.start,
+            end=m.end,
+            direction=m.direction,
+            distance=m.distance,
+            event="blocked",
+            fired_start=m.fired_start,
+            fired=m.fired_start,
+            closed=(),
+            opened=(),
+            measured=m.measured,
+        )
+
+
+def test_a_lost_closing_signal_is_recovered_by_reading_the_sensors_at_rest() -> None:
+    script: list[tuple[Event, float, tuple[int, ...]]] = [
+        ("touch", 0.02, (0,)),
+        ("release", 0.05, ()),
+        ("none", 1.0, ()),  # l1
+        ("touch", 0.004, (3,)),  # during l2 sensor 3 (-y) closes, but its signal is lost
+        ("release", 0.03, ()),
+        ("none", 1.0, ()),
+        ("none", 1.0, ()),
+        ("none", 1.0, ()),
+    ]
+    world = DroppingWorld(deque(script), drop=3)
+    c = run(world)
+    call = world.calls[4]
+    assert call.kind == "slide"  # the cycle stopped at the contact and follows sensor 3
+    assert call.sensor == 3
+    assert _dir(call) == (-1.0, 0.0, 0.0)
+    rec = c.record(complete=True)
+    touch = [x for x in rec.contacts if x.kind == "touch"][1]
+    assert touch.sensor == 3
+    assert touch.sensors == (3,)
+    assert "1 lost sensor signal(s) recovered by reading the sensors at rest" in rec.notes
+    # without the drop-out the same motions are made and nothing is noted
+    plain = ScriptedWorld(deque(script))
+    c2 = run(plain)
+    assert [(k.kind, k.sensor) for k in plain.calls] == [(k.kind, k.sensor) for k in world.calls]
+    assert not any("lost sensor" in n for n in c2.record(complete=True).notes)

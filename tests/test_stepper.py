@@ -321,3 +321,23 @@ def test_every_face_of_an_octahedron_has_tip_centres_at_two_heights() -> None:
             assert on.sum() >= 3  # the top, from above
         else:
             assert len(heights) >= 2, f"face {np.round(n, 3)} felt at heights {heights}"
+
+
+@pytest.mark.parametrize("turn", [0.0, 5.0, 90.0, 12.0, 37.0, 200.0])
+def test_the_4_sensor_finger_refuses_objects_turned_away_from_its_sensors(turn: float) -> None:
+    from tactile_kb.errors import ExplorationError
+    from tactile_kb.finger import ALIGN_4_DEG
+
+    # ground truth: the L's faces are turned from the x/y sensors by the turn modulo 90°
+    off = min(turn % 90.0, 90.0 - turn % 90.0)
+    mesh = solids.rotate_about_z(solids.l_shape(0.1, 0.08, 0.04, 0.05), turn)
+    if off <= ALIGN_4_DEG:
+        rec = StepperExplorer().explore(mesh, finger="4", seed=0)
+        assert all(layer.closed and len(layer.contour) == 6 for layer in rec.layers)
+        assert not any("turned" in n for n in rec.notes)
+        return
+    with pytest.raises(ExplorationError, match=rf"turned {off:.0f}° from sensor \d of finger '4'"):
+        StepperExplorer().explore(mesh, finger="4", seed=0)
+    # the 33-sensor finger has no such limit
+    rec = StepperExplorer().explore(mesh, finger="33", seed=0)
+    assert not any("turned" in n for n in rec.notes)
