@@ -29,7 +29,7 @@ typecheck: $(STAMP)
 	$(BIN)/mypy tactile_kb explorers/mujoco/tactile_kb_mujoco
 
 docs: $(STAMP)
-	NO_MKDOCS_2_WARNING=1 $(BIN)/mkdocs build --strict --quiet --site-dir .site
+	NO_MKDOCS_2_WARNING=1 $(BIN)/mkdocs build --strict --site-dir .site
 
 # On a fresh clone the core suite runs before the MuJoCo plugin is installed, which shows the
 # core works without it; then the plugin is installed and its tests (with the explorer contract
