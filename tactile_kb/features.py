@@ -22,13 +22,19 @@ parameter                      meaning                                          
 ``residual_tol``               RMS misfit (m) of a face's contacts meaning curved   1.5 mm
 ``smooth_deg``                 edges whose normals differ by less are "smooth"      35°
 ``min_smooth_edges``           that many smooth edges mean curved                   6
-``rel_tol``                    relative spread of lengths counted as equal          0.08
+``spread_deg``                 contact directions of one face further apart mean    10°
+                               curved (a plane fires the same sensors everywhere)
+``rel_tol``                    relative spread of lengths counted as equal          0.06
+                               (edges: or within ``sigmas`` × their uncertainty,
+                               ``sigmas`` = 4 for ``equal_edges``)
 ``point_tol``                  RMS miss distance of concurrent lines / diameter     0.05
 ``horizontal_deg``             a face within this of ±z is the base or the top      10°
 =============================  ==================================================  =========
 
-The "lateral" edges are those not on the base (the table face) nor on a top face (normal
-within ``horizontal_deg`` of +z): the vertical edges of a prism, the edges to a pyramid's apex.
+The "lateral" edges are those not on the base nor on the top face: the vertical edges of a
+prism, the edges to a pyramid's apex. Base and top are found from the shape, whatever face the
+object rests on (a prism's two ends, the face opposite a pyramid's apex; see ``_caps``), else
+the faces within ``horizontal_deg`` of −z and +z; on its base, the base is the table face.
 
 Examples
 --------
@@ -68,6 +74,7 @@ __all__ = [
     "Feature",
     "available_features",
     "check_binding",
+    "edge_uncertainties",
     "evaluate_feature",
     "face_angles",
     "feature_registry",
@@ -90,9 +97,13 @@ SIGMAS = 3.0
 RESIDUAL_TOL = 0.0015
 SMOOTH_DEG = 35.0
 MIN_SMOOTH_EDGES = 6
-REL_TOL = 0.08
+REL_TOL = 0.06
+EDGE_SIGMAS = 4.0
+"""The largest of a dozen edge differences is a range statistic: the range of 12 Gaussian
+lengths exceeds 4·√2·σ with a probability below 1 %."""
 POINT_TOL = 0.05
 HORIZONTAL_DEG = 10.0
+SPREAD_DEG = 10.0
 
 
 @dataclass(frozen=True)
@@ -211,9 +222,48 @@ def _base_top(p: Polyhedron, horizontal_deg: float) -> tuple[set[int], set[int]]
 
 
 def _caps(model: ObjectModel, name: str, horizontal_deg: float) -> tuple[set[int], set[int]]:
-    """The base and top faces of the polyhedron (raises if the model is open)."""
+    """The base and top faces of the polyhedron (raises if the model is open).
+
+    Found from the shape, not from z, so that a prism lying on a side is still a prism:
+
+    1. a *base pair*: two parallel faces that every other face touches (along an edge or
+       at a vertex: a prism's or a frustum's ends); among several (a box) the pair holding
+       the table face;
+    2. else an *apex*: a vertex where all faces but one meet (a pyramid's); the base is the
+       face not there (among several, a tetrahedron's, the table face);
+    3. else the faces within ``horizontal_deg`` of −z (base) and +z (top).
+
+    For an object resting on its base all three agree with the paper's "vertical" edges.
+    """
     p = _poly(model, name)
-    return model.derived((__name__, "caps", horizontal_deg), lambda: _base_top(p, horizontal_deg))
+
+    def compute() -> tuple[set[int], set[int]]:
+        base, top = _base_top(p, horizontal_deg)
+        f_ = len(p.faces)
+        touches = np.zeros((f_, f_), dtype=bool)  # faces sharing a vertex
+        at: list[list[int]] = [[] for _ in range(len(p.vertices))]
+        for f, poly in enumerate(p.faces):
+            for v in poly:
+                at[v].append(f)
+        for fs in at:
+            touches[np.ix_(fs, fs)] = True
+        parallel = _parallelism(model, TOLERANCE_DEG, SIGMAS)
+        pairs = [
+            (f, g)
+            for f, g in zip(*np.nonzero(np.triu(parallel, 1)), strict=True)
+            if np.delete(touches[f] & touches[g], [f, g]).all()
+        ]
+        if pairs:
+            f, g = next((q for q in pairs if base & set(q)), pairs[0])
+            return ({int(g)}, {int(f)}) if int(g) in base else ({int(f)}, {int(g)})
+        if f_ >= 4:
+            missing = [set(range(f_)) - set(fs) for fs in at if len(fs) == f_ - 1]
+            if missing:
+                b = next((m for m in missing if m & base), missing[0])
+                return {int(next(iter(b)))}, set()
+        return base, top
+
+    return model.derived((__name__, "caps", horizontal_deg), compute)
 
 
 def _sides(model: ObjectModel, name: str, horizontal_deg: float) -> list[int]:
@@ -322,15 +372,44 @@ def surface_curved(
     residual_tol: float = RESIDUAL_TOL,
     smooth_deg: float = SMOOTH_DEG,
     min_smooth_edges: int = MIN_SMOOTH_EDGES,
+    spread_deg: float = SPREAD_DEG,
 ) -> bool:
-    """The surface is curved: a face's contacts do not fit one plane, or many smooth edges."""
+    """The surface is curved: a face's contacts do not fit one plane, fired sensors more than
+    ``spread_deg`` apart (every contact on a plane fires the same sensors), or many smooth
+    edges (without a polyhedron: many faces with a neighbour direction that close)."""
     if any(f.refined and f.residual > residual_tol for f in model.faces):
         return True
+    if _direction_spread_deg(model) > spread_deg:
+        return True
     p = model.polyhedron
+    cos_smooth = math.cos(math.radians(smooth_deg))
     if p is None:
-        return False
-    smooth = int((_edge_cosines(model, p) > math.cos(math.radians(smooth_deg))).sum())
+        # no polyhedron (vertices of many narrow faces merged away): count the faces whose
+        # nearest neighbour direction is within ``smooth_deg``, as the smooth edges they make
+        n = np.asarray([f.normal for f in model.contact_faces], dtype=float).reshape(-1, 3)
+        if len(n) < 2:
+            return False
+        c = n @ n.T
+        np.fill_diagonal(c, -1.0)
+        return int((c.max(axis=1) > cos_smooth).sum()) >= min_smooth_edges
+    smooth = int((_edge_cosines(model, p) > cos_smooth).sum())
     return smooth >= min_smooth_edges
+
+
+def _direction_spread_deg(model: ObjectModel) -> float:
+    """Largest angle (degrees) between the contact directions of two contacts of one face."""
+
+    def compute() -> float:
+        worst = 1.0
+        contacts = model.record.contacts
+        for f in model.faces:
+            if len(f.contacts) >= 2:
+                d = np.asarray([contacts[i].direction for i in f.contacts], dtype=float)
+                d /= np.linalg.norm(d, axis=1)[:, None]
+                worst = min(worst, float((d @ d.T).min()))
+        return float(np.degrees(np.arccos(np.clip(worst, -1.0, 1.0))))
+
+    return model.derived((__name__, "direction_spread"), compute)
 
 
 def _edge_cosines(model: ObjectModel, p: Polyhedron) -> FloatArray:
@@ -351,10 +430,15 @@ def surface_plane(
     residual_tol: float = RESIDUAL_TOL,
     smooth_deg: float = SMOOTH_DEG,
     min_smooth_edges: int = MIN_SMOOTH_EDGES,
+    spread_deg: float = SPREAD_DEG,
 ) -> bool:
     """The surface is plane: touched somewhere, and not curved (see ``surface_curved``)."""
     return contact(model) and not surface_curved(
-        model, residual_tol=residual_tol, smooth_deg=smooth_deg, min_smooth_edges=min_smooth_edges
+        model,
+        residual_tol=residual_tol,
+        smooth_deg=smooth_deg,
+        min_smooth_edges=min_smooth_edges,
+        spread_deg=spread_deg,
     )
 
 
@@ -443,11 +527,62 @@ def adjacent_faces_perpendicular(
     return bool(table[ef[:, 0], ef[:, 1]].all())
 
 
-def equal_edges(model: ObjectModel, *, rel_tol: float = REL_TOL) -> bool:
-    """Distances between neighbouring vertices are equal: (max − min) / mean ≤ ``rel_tol``."""
+def _edge_sigmas(model: ObjectModel) -> FloatArray:
+    def compute() -> FloatArray:
+        p = _poly(model, "edge_uncertainties")
+        f_ = len(p.faces)
+        if len(model.face_of) == f_:
+            faces = [model.faces[i] for i in model.face_of]
+            off = np.asarray([f.offset_uncertainty for f in faces], dtype=float)
+            ang = np.radians([f.normal_uncertainty_deg for f in faces])
+        else:  # a polyhedron without model faces: exact planes
+            off, ang = np.zeros(f_), np.zeros(f_)
+        at: list[list[int]] = [[] for _ in range(len(p.vertices))]
+        for f, poly in enumerate(p.faces):
+            for v in poly:
+                at[v].append(f)
+        cov = np.zeros((len(p.vertices), 3, 3))
+        for v, fs in enumerate(at):
+            n = p.normals[fs]
+            # a tilt of plane i by δθ about its contacts' centre moves it at the vertex by
+            # δθ·|v − centre|: each plane's offset error there, then least squares
+            lever = np.linalg.norm(p.vertices[v] - p.face_centroids[fs], axis=1)
+            var = off[fs] ** 2 + (ang[fs] * lever) ** 2
+            a = np.linalg.pinv(n)  # (3, k): the least-squares vertex of the planes
+            cov[v] = (a * var[None, :]) @ a.T
+        e = np.asarray(p.edges, dtype=np.intp).reshape(-1, 2)
+        u = p.vertices[e[:, 1]] - p.vertices[e[:, 0]]
+        u /= np.linalg.norm(u, axis=1)[:, None]
+        c = cov[e[:, 0]] + cov[e[:, 1]]
+        return np.asarray(np.sqrt(np.einsum("ei,eij,ej->e", u, c, u)), dtype=float)
+
+    return model.derived((__name__, "edge_sigmas"), compute)
+
+
+def edge_uncertainties(model: ObjectModel) -> FloatArray:
+    """(E,) estimated 1σ uncertainty (m) of each polyhedron edge's length.
+
+    Each vertex is the least-squares point of the planes meeting there; each plane's error
+    at the vertex combines its offset uncertainty and its normal uncertainty times the
+    distance from the face's centre (:class:`~tactile_kb.planes.Face` reports both), and the
+    two end vertices' errors along the edge add in quadrature. Exact planes give 0.
+    """
+    return _edge_sigmas(model).copy()
+
+
+def equal_edges(
+    model: ObjectModel, *, rel_tol: float = REL_TOL, sigmas: float = EDGE_SIGMAS
+) -> bool:
+    """Distances between neighbouring vertices are equal: every two edge lengths differ by at
+    most ``max(rel_tol · mean, sigmas · √(σ₁² + σ₂²))``, σ from :func:`edge_uncertainties`."""
     p = _poly(model, "equal_edges")
     lengths = model.derived((__name__, "edge_lengths"), p.edge_lengths)
-    return bool((lengths.max() - lengths.min()) / lengths.mean() <= rel_tol)
+    sig = _edge_sigmas(model)
+    diff = np.abs(lengths[:, None] - lengths[None, :])
+    allowed = np.maximum(
+        rel_tol * lengths.mean(), sigmas * np.sqrt(sig[:, None] ** 2 + sig[None, :] ** 2)
+    )
+    return bool((diff <= allowed).all())
 
 
 def _congruence(p: Polyhedron) -> tuple[bool, float, float, float]:
@@ -485,7 +620,8 @@ def congruent_faces(
 
 
 def top_face(model: ObjectModel, *, horizontal_deg: float = HORIZONTAL_DEG) -> bool:
-    """A top face parallel to the base (the table) exists."""
+    """A top face parallel to the base exists (the base: the table face, or a prism's or a
+    frustum's end when it lies on a side)."""
     _, top = _caps(model, "top_face", horizontal_deg)
     return bool(top)
 
@@ -503,11 +639,13 @@ def lateral_faces_vertical(
     tolerance_deg: float = TOLERANCE_DEG,
     horizontal_deg: float = HORIZONTAL_DEG,
 ) -> bool:
-    """Every lateral face is vertical (its normal horizontal within ``tolerance_deg``)."""
+    """Every lateral face is "vertical": perpendicular to the base within ``tolerance_deg``."""
     p = _poly(model, "lateral_faces_vertical")
     sides = _sides(model, "lateral_faces_vertical", horizontal_deg)
+    base, _ = _caps(model, "lateral_faces_vertical", horizontal_deg)
+    axis = p.normals[min(base)] if base else np.array([0.0, 0.0, -1.0])
     s = math.sin(math.radians(tolerance_deg))
-    return bool(sides) and all(abs(p.normals[f, 2]) <= s for f in sides)
+    return bool(sides) and all(abs(p.normals[f] @ axis) <= s for f in sides)
 
 
 def triangle_faces(model: ObjectModel) -> bool:

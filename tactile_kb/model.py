@@ -41,7 +41,13 @@ from tactile_kb.polyhedron import DEFAULT_MERGE_FRACTION, Polyhedron, polyhedron
 from tactile_kb.record import ExplorationRecord
 from tactile_kb.sections import LayerSection, distinct_planes, layer_sections
 
-__all__ = ["ObjectModel", "build_model"]
+__all__ = ["NOISY_MERGE_FRACTION", "ObjectModel", "build_model"]
+
+NOISY_MERGE_FRACTION = 0.05
+"""Vertex merge fraction of the object's smallest extent when the record declares
+contact-position noise: four or more noisy planes meeting at one vertex (an octahedron's)
+leave a gap of 3.5–5 % of an edge. Of the smallest extent, not the diameter: a thin
+heptagonal prism 29 cm tall has 1.1 cm edges (4 % of its diameter)."""
 
 T = TypeVar("T")
 
@@ -143,7 +149,10 @@ def build_model(
     cut_deg, split_tol
         Passed to :func:`tactile_kb.planes.merge_planes`.
     merge_fraction
-        Passed to :func:`tactile_kb.polyhedron.polyhedron_from_planes`.
+        Passed to :func:`tactile_kb.polyhedron.polyhedron_from_planes`. When
+        ``record.params["noise"]`` is positive and this is the default, vertices merge within
+        :data:`NOISY_MERGE_FRACTION` × the touched points' smallest extent if that is larger
+        (``options["merge_tol"]``).
     include_table
         Add the support plane z = 0 as a face.
     support_tol
@@ -186,17 +195,23 @@ def build_model(
         "cut_deg": cut_deg,
         "split_tol": split_tol,
         "merge_fraction": merge_fraction,
+        "merge_tol": None,
         "include_table": include_table,
         "support_tol": tol,
         "open_factor": open_factor,
     }
     layers = layer_sections(record)
     kept = [i for i, s in enumerate(supporting) if s]
+    merge_tol = None
+    if noise > 0 and merge_fraction == DEFAULT_MERGE_FRACTION and len(points) >= 4:
+        merge_tol = _noisy_merge_tol(points, merge_fraction)
+        options["merge_tol"] = merge_tol
     try:
         poly = polyhedron_from_planes(
             normals[kept],
             offsets[kept],
             merge_fraction=merge_fraction,
+            tol=merge_tol,
             bound=_bound(points, open_factor),
             interior=points.mean(axis=0) if len(points) >= 4 else None,
         )
@@ -208,6 +223,18 @@ def build_model(
         return ObjectModel(record, faces, None, tuple(supporting), str(exc), [], layers, options)
     face_of = tuple(kept[p] for p in poly.plane_index)
     return ObjectModel(record, faces, poly, tuple(supporting), "", [], layers, options, face_of)
+
+
+def _noisy_merge_tol(points: np.ndarray[Any, np.dtype[np.float64]], fraction: float) -> float:
+    """The vertex merge distance (m) for a noisy record: ``fraction`` × the touched points'
+    largest extent, or :data:`NOISY_MERGE_FRACTION` × their smallest extent (along their
+    principal axes) if that is larger. Four noisy planes meeting at one vertex of a compact
+    object (an octahedron) split it by 3.5–5 % of an edge; an elongated object (a thin prism)
+    has short edges across its length, which its smallest extent protects."""
+    centred = points - points.mean(axis=0)
+    _, _, vt = np.linalg.svd(centred, full_matrices=False)
+    extents = np.ptp(centred @ vt.T, axis=0)
+    return float(max(fraction * extents.max(), NOISY_MERGE_FRACTION * extents.min()))
 
 
 def _bound(

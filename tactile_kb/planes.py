@@ -113,6 +113,9 @@ class Face:
         True when the normal comes from the least-squares fit of the tip centres.
     source
         ``"contacts"`` or ``"table"`` (the support plane z = 0).
+    offset_uncertainty
+        Estimated (1σ) uncertainty of ``offset`` (m) at the centre of the face's contacts:
+        the tip centres' scatter about the plane over √(number of contacts); 0 for the table.
     """
 
     normal: Vec3
@@ -123,6 +126,7 @@ class Face:
     contacts: tuple[int, ...]
     refined: bool
     source: str = "contacts"
+    offset_uncertainty: float = 0.0
 
     @property
     def normal_array(self) -> FloatArray:
@@ -432,6 +436,7 @@ def merge_plane_arrays(
             span_min,
             merge_deg,
             cone if quantised else 0.0,
+            noise,
         )
     if include_table and not any(
         f.normal[2] < -math.cos(math.radians(merge_deg)) and abs(f.offset) <= tol for f in faces
@@ -449,6 +454,7 @@ def _faces_from_contacts(
     span_min: float,
     merge_deg: float,
     cone: float,
+    noise: float = 0.0,
 ) -> list[Face]:
     centres, directions, points = arrays
     normals = -directions
@@ -479,8 +485,10 @@ def _faces_from_contacts(
     for g in groups:
         f = fit(g)
         m = len(g)
+        sigma = math.sqrt(_sse(f) / max(m - 3 if f.refined else m - 1, 1))
+        if m <= 4:  # three or four centres fit a plane (nearly) exactly: trust the noise
+            sigma = max(sigma, noise)
         if f.refined:
-            sigma = math.sqrt(_sse(f) / max(m - 3, 1))
             unc = math.degrees(math.atan2(sigma, f.span * math.sqrt(m)))
         else:
             spread = float(np.degrees(np.arccos(np.clip(normals[g] @ f.normal, -1, 1))).max())
@@ -496,6 +504,7 @@ def _faces_from_contacts(
                 normal_uncertainty_deg=unc,
                 contacts=tuple(index[np.sort(g)].tolist()),
                 refined=f.refined,
+                offset_uncertainty=sigma / math.sqrt(m),
             )
         )
     return out

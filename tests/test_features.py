@@ -21,6 +21,7 @@ from tactile_kb.features import (
     Feature,
     available_features,
     check_binding,
+    edge_uncertainties,
     evaluate_feature,
     face_angles,
     feature_registry,
@@ -337,3 +338,85 @@ def test_third_party_feature_joins_the_registry() -> None:
     assert not evaluate_feature("tall_test_only", model, {"min_height": 0.2})
     with pytest.raises(UsageError, match="has no parameter 'height'"):
         evaluate_feature("tall_test_only", model, {"height": 1})
+
+
+def test_edge_uncertainties_are_zero_for_exact_planes_and_calibrated_under_noise() -> None:
+    a = 0.05
+    exact = build_model(
+        sample_record(solids.box(a, a, a), FINGER, per_face=10, quantise=False, noise=0.0)
+    )
+    assert np.all(edge_uncertainties(exact) < 1e-12)
+    z = []
+    for seed in range(12):
+        rec = sample_record(solids.box(a, a, a), FINGER, per_face=10, noise=0.0005, seed=seed)
+        model = build_model(rec)
+        assert model.polyhedron is not None
+        sig = edge_uncertainties(model)
+        assert np.all(sig > 0)
+        z += list((model.polyhedron.edge_lengths() - a) / sig)  # truth: every edge is a
+    rms = math.sqrt(float(np.mean(np.square(z))))
+    assert 0.4 < rms < 2.0, rms
+
+
+@pytest.mark.parametrize("noise", [0.0, 0.0005])
+def test_equal_edges_tells_a_cube_from_a_box_fifteen_percent_off(noise: float) -> None:
+    for a in (0.03, 0.1):
+        for seed in range(3):
+            cube = build_model(
+                sample_record(solids.box(a, a, a), FINGER, per_face=10, noise=noise, seed=seed)
+            )
+            assert evaluate_feature("equal_edges", cube, {"rel_tol": 0.05})
+            off = build_model(
+                sample_record(
+                    solids.box(a, a, 1.15 * a), FINGER, per_face=10, noise=noise, seed=seed
+                )
+            )
+            assert not evaluate_feature("equal_edges", off, {"rel_tol": 0.05})
+
+
+def _rest_on_each_face(mesh: trimesh.Trimesh) -> list[trimesh.Trimesh]:
+    normals: list[np.ndarray] = []
+    for n in mesh.face_normals:
+        if not any(float(n @ m) > 1 - 1e-6 for m in normals):
+            normals.append(np.asarray(n))
+    return [solids.rest_on_face(mesh, n) for n in normals]
+
+
+@pytest.mark.parametrize(
+    ("mesh", "parallel", "top", "sides"),
+    [
+        (solids.prism(3, 0.05, 0.12), True, True, 3),
+        (solids.prism(6, 0.05, 0.09), True, True, 6),
+        (solids.pyramid(4, 0.05, 0.08), False, False, 4),
+        (solids.frustum(5, 0.06, 0.03, 0.05), False, True, 5),
+    ],
+    ids=["prism3", "prism6", "pyramid4", "frustum5"],
+)
+def test_base_and_lateral_edges_do_not_depend_on_the_resting_face(
+    mesh: trimesh.Trimesh, parallel: bool, top: bool, sides: int
+) -> None:
+    for posed in _rest_on_each_face(mesh):
+        model = build_model(sample_record(posed, FINGER, per_face=8, quantise=False, noise=0.0))
+        assert get_feature("lateral_edges_parallel").fn(model) is parallel
+        assert get_feature("lateral_edges_concurrent").fn(model) is (not parallel)
+        assert get_feature("top_face").fn(model) is top
+        assert side_count(model) == sides
+        assert get_feature("lateral_faces_vertical").fn(model) is parallel
+
+
+def test_curved_when_one_face_fires_sensors_far_apart() -> None:
+    rec = sample_record(solids.box(0.08, 0.08, 0.08), FINGER, per_face=8, quantise=False, noise=0.0)
+    model = build_model(rec)
+    face = model.contact_faces[0]
+    i = face.contacts[0]
+    d = np.asarray(rec.contacts[i].direction)
+    tilt = np.cross(d, [0.0, 0.0, 1.0]) if abs(d[2]) < 0.9 else np.array([1.0, 0.0, 0.0])
+    turned = d * math.cos(math.radians(12)) + tilt / np.linalg.norm(tilt) * math.sin(
+        math.radians(12)
+    )
+    contacts = list(rec.contacts)
+    contacts[i] = contacts[i].model_copy(update={"direction": tuple(float(x) for x in turned)})
+    changed = build_model(rec.model_copy(update={"contacts": contacts}))
+    assert not get_feature("surface_curved").fn(model)
+    assert get_feature("surface_curved").fn(changed, spread_deg=10.0)
+    assert not get_feature("surface_curved").fn(changed, spread_deg=15.0)

@@ -6,7 +6,8 @@ import numpy as np
 
 from tactile_kb import solids
 from tactile_kb.finger import builtin_finger
-from tactile_kb.model import build_model
+from tactile_kb.model import NOISY_MERGE_FRACTION, build_model
+from tactile_kb.polyhedron import DEFAULT_MERGE_FRACTION
 from tactile_kb.record import ExplorationRecord
 from tactile_kb.synthetic import sample_layers, sample_record
 
@@ -74,3 +75,34 @@ def test_derived_values_are_computed_once_per_model() -> None:
     fresh = dataclasses.replace(model)
     assert fresh.derived(("test", "x"), compute) == 42
     assert len(calls) == 2
+
+
+def test_noisy_octahedra_keep_six_vertices_more_often() -> None:
+    # four noisy planes meet near, not at, each vertex: they merge at the noisy tolerance
+    merged = split = 0
+    for seed in range(10):
+        rec = sample_record(solids.octahedron(0.08), F33, per_face=10, noise=0.0005, seed=seed)
+        model = build_model(rec)
+        assert model.polyhedron is not None
+        tol = model.options["merge_tol"]
+        # the octahedron's smallest extent (between parallel faces) is 0.08·√(2/3)
+        assert tol >= NOISY_MERGE_FRACTION * 0.08 * (2 / 3) ** 0.5 * 0.95
+        merged += len(model.polyhedron.vertices) == 6
+        at_exact = build_model(rec, merge_fraction=DEFAULT_MERGE_FRACTION + 1e-9).polyhedron
+        assert at_exact is not None
+        split += len(at_exact.vertices) == 6
+    assert merged >= 7
+    assert merged > split
+    exact = build_model(sample_record(solids.octahedron(0.04), F33, per_face=10, noise=0.0))
+    assert exact.options["merge_tol"] is None
+    assert exact.polyhedron is not None
+    assert len(exact.polyhedron.vertices) == 6
+
+
+def test_noisy_merge_keeps_the_short_edges_of_a_thin_prism() -> None:
+    mesh = solids.prism(7, 0.0133, 0.29)  # edges of 1.15 cm on an object 29 cm tall
+    rec = sample_record(mesh, F33, per_face=10, noise=0.0005, seed=0)
+    model = build_model(rec)
+    assert model.options["merge_tol"] < 0.8 * 2 * 0.0133 * np.sin(np.pi / 7)
+    assert model.polyhedron is not None
+    assert len(model.polyhedron.faces) == 9

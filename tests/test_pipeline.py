@@ -4,9 +4,11 @@ from __future__ import annotations
 
 from pathlib import Path
 
+import numpy as np
 import pytest
 import trimesh
 
+from tactile_kb import solids
 from tactile_kb.errors import ObjectError, RuleFileError, UsageError
 from tactile_kb.pipeline import classify, classify_record, knowledge_base
 from tactile_kb.solids import box, fig5_objects, parallelepiped, tetrahedron
@@ -145,3 +147,50 @@ def test_unknown_measure_is_located(tmp_path: Path) -> None:
         f"{path}:13:21: classes[0].report[1]: unknown measure 'colour' "
         "(known: edges, faces, height, sides, vertices, volume)"
     ]
+
+
+def test_cube11_with_noise_is_a_cube_and_boxes_fifteen_percent_off_are_not() -> None:
+    cube11 = {name: mesh for name, mesh, _ in fig5_objects()}["CUBE11"]
+    for seed in range(4):
+        assert classify(cube11, noise=0.0005, seed=seed).decision.label == "cube"
+    for dims in ((0.1, 0.1, 0.115), (0.03, 0.0345, 0.03)):
+        assert classify(box(*dims)).decision.label == "rectangular_parallelepiped"
+        for seed in range(2):
+            got = classify(box(*dims), rules="polyhedra", noise=0.0005, seed=seed)
+            assert got.decision.label == "rectangular_parallelepiped"
+
+
+def _lying(mesh: trimesh.Trimesh) -> trimesh.Trimesh:
+    """``mesh`` resting on its first face that is not horizontal (neither an end nor the base:
+    the solids are built standing on their base) where no face overhangs by more than 20°,
+    the most the 33-sensor finger feels."""
+    for normal in mesh.face_normals:
+        if abs(float(normal[2])) < 0.99:
+            posed = solids.rest_on_face(mesh, normal)
+            down = posed.face_normals[:, 2]
+            low = posed.triangles_center[:, 2] > 1e-9  # not on the table
+            if float(np.degrees(np.arcsin(np.clip(-down[low], 0.0, 1.0))).max()) <= 20.0:
+                return posed
+    raise AssertionError("no admissible pose")
+
+
+@pytest.mark.parametrize(
+    ("mesh", "label", "sides", "noise"),
+    [
+        (solids.prism(3, 0.04, 0.12), "prism", 3, 0.0),
+        (solids.prism(3, 0.04, 0.12), "prism", 3, 0.0005),
+        (solids.pyramid(4, 0.05, 0.08), "pyramid", 4, 0.0),
+        (solids.frustum(3, 0.06, 0.03, 0.08), "frustum", 3, 0.0),
+        (solids.frustum(3, 0.06, 0.03, 0.08), "frustum", 3, 0.0005),
+    ],
+    ids=["prism3", "prism3-noisy", "pyramid4", "frustum3", "frustum3-noisy"],
+)
+def test_solids_lying_on_a_side_keep_their_family(
+    mesh: trimesh.Trimesh, label: str, sides: int, noise: float
+) -> None:
+    posed = _lying(mesh)
+    assert abs(float(np.ptp(posed.vertices[:, 2])) - float(np.ptp(mesh.vertices[:, 2]))) > 1e-3
+    for seed in (1,):
+        result = classify(posed, rules="polyhedra", noise=noise, seed=seed)
+        assert result.decision.label == label, (noise, result.decision.bits)
+        assert result.measures["sides"] == sides
