@@ -139,7 +139,11 @@ def _draw_3d(
     extent: list[np.ndarray[Any, np.dtype[np.float64]]] = []
     if mesh is not None:
         tris = np.asarray(mesh.vertices)[np.asarray(mesh.faces)]
-        ax.add_collection3d(Poly3DCollection(tris, facecolor="0.55", edgecolor="none", alpha=0.18))
+        ax.add_collection3d(
+            Poly3DCollection(
+                tris, facecolor="0.55", edgecolor="none", alpha=0.18, label="object (true mesh)"
+            )
+        )
         extent.append(np.asarray(mesh.vertices, dtype=float))
     if record.path:
         path = np.asarray(record.path, dtype=float)
