@@ -31,6 +31,15 @@ parameter                      meaning                                          
 ``horizontal_deg``             a face within this of ±z is the base or the top      10°
 =============================  ==================================================  =========
 
+``orthogonal_faces`` (every two faces of the object parallel or perpendicular: with
+``convex`` false, an object composed of rectangular parallelepipeds) reads every face of the
+model, the concave ones too, with the same ``tolerance_deg`` and ``sigmas``.
+
+A model closed by an assumed top (``model.assumed_top``: the top was never touched) does not
+know its height: ``equal_edges`` and ``congruent_faces``, which would compare the unknown
+lateral edges, are then False (not established), so a cube felt only by the 4-sensor finger
+is answered as what it certainly is, a rectangular parallelepiped.
+
 The "lateral" edges are those not on the base nor on the top face: the vertical edges of a
 prism, the edges to a pyramid's apex. Base and top are found from the shape, whatever face the
 object rests on (a prism's two ends, the face opposite a pyramid's apex; see ``_caps``), else
@@ -83,6 +92,7 @@ __all__ = [
     "lateral_edges",
     "measure",
     "measure_names",
+    "orthogonal_faces",
     "parallelism_table",
     "perpendicularity_table",
     "section_at",
@@ -574,8 +584,13 @@ def equal_edges(
     model: ObjectModel, *, rel_tol: float = REL_TOL, sigmas: float = EDGE_SIGMAS
 ) -> bool:
     """Distances between neighbouring vertices are equal: every two edge lengths differ by at
-    most ``max(rel_tol · mean, sigmas · √(σ₁² + σ₂²))``, σ from :func:`edge_uncertainties`."""
+    most ``max(rel_tol · mean, sigmas · √(σ₁² + σ₂²))``, σ from :func:`edge_uncertainties`.
+
+    False on a model closed by an assumed top (``model.assumed_top``): the lateral edges'
+    true length is unknown."""
     p = _poly(model, "equal_edges")
+    if model.assumed_top is not None:
+        return False
     lengths = model.derived((__name__, "edge_lengths"), p.edge_lengths)
     sig = _edge_sigmas(model)
     diff = np.abs(lengths[:, None] - lengths[None, :])
@@ -613,8 +628,11 @@ def _congruence(p: Polyhedron) -> tuple[bool, float, float, float]:
 def congruent_faces(
     model: ObjectModel, *, rel_tol: float = REL_TOL, tolerance_deg: float = TOLERANCE_DEG
 ) -> bool:
-    """All faces are congruent: same number of sides, side lengths and angles."""
+    """All faces are congruent: same number of sides, side lengths and angles (False on a
+    model closed by an assumed top, whose lateral faces' height is unknown)."""
     p = _poly(model, "congruent_faces")
+    if model.assumed_top is not None:
+        return False
     same, dl, da, scale = model.derived((__name__, "congruence"), lambda: _congruence(p))
     return same and not (dl > rel_tol * scale or da > tolerance_deg)
 
@@ -656,6 +674,28 @@ def triangle_faces(model: ObjectModel) -> bool:
 def convex(model: ObjectModel) -> bool:
     """No concave face was touched (an object of several boxes is not convex)."""
     return model.convex
+
+
+def orthogonal_faces(
+    model: ObjectModel, *, tolerance_deg: float = TOLERANCE_DEG, sigmas: float = SIGMAS
+) -> bool:
+    """Every two faces of the object are parallel or perpendicular (all its faces, the concave
+    ones and the table too, not only the envelope's): a box, or with ``convex`` false an
+    object composed of rectangular parallelepipeds. Two normals count as parallel or
+    perpendicular within ``max(tolerance_deg, sigmas · √(u₁² + u₂²))``, u the faces' normal
+    uncertainties."""
+
+    def compute() -> bool:
+        n = np.asarray([f.normal for f in model.faces], dtype=float).reshape(-1, 3)
+        if len(n) < 2:
+            return False
+        u = np.asarray([f.normal_uncertainty_deg for f in model.faces], dtype=float)
+        tol = np.maximum(tolerance_deg, sigmas * np.sqrt(u[:, None] ** 2 + u[None, :] ** 2))
+        ang = np.degrees(np.arccos(np.clip(n @ n.T, -1.0, 1.0)))
+        off = np.minimum(np.minimum(ang, 180.0 - ang), np.abs(ang - 90.0))
+        return bool((off <= tol).all())
+
+    return model.derived((__name__, "orthogonal_faces", tolerance_deg, sigmas), compute)
 
 
 # ---------------------------------------------------------------------------------------------
@@ -723,6 +763,7 @@ BUILTIN_FEATURES: Mapping[str, Feature] = {
         _feature(lateral_faces_vertical),
         _feature(triangle_faces),
         _feature(convex),
+        _feature(orthogonal_faces),
     )
 }
 """The built-in features by name; the entry point ``builtin`` of ``tactile_kb.features``."""

@@ -11,7 +11,12 @@ extractors read.
 A face whose plane has touched points of the object outside it is *concave* (the inner sides
 of an L-shaped block): the polyhedron is built from the supporting faces only, so for a
 non-convex object it is its convex envelope, and the layer contours are the other view.
-A partial record (an unexplored side) gives ``polyhedron=None`` and ``open_reason``.
+A partial record (an unexplored side) gives ``polyhedron=None`` and ``open_reason``. With
+``assume_top=True``, a model open only at the top is closed instead: the 4-sensor finger,
+whose sensors lie on the equator, never feels a top face, and contour following of a U-shaped
+block does not reach it either. Then the model is closed by an *assumed top*, the horizontal plane through the highest touched
+point (the object reaches at least that high), recorded as ``assumed_top``: features that
+depend on the true height must not trust it (see :func:`tactile_kb.features.equal_edges`).
 
 Examples
 --------
@@ -25,10 +30,14 @@ Examples
 >>> m2 = build_model(partial)
 >>> m2.polyhedron is None, m2.open_directions
 (True, [(0.0, 0.0, 1.0)])
+>>> m3 = build_model(partial, assume_top=True)
+>>> m3.polyhedron is not None, len(m3.faces), m3.faces[-1].source, m3.assumed_top is not None
+(True, 6, 'assumed', True)
 """
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable, Hashable
 from dataclasses import dataclass, field
 from typing import Any, TypeVar, cast
@@ -41,7 +50,11 @@ from tactile_kb.polyhedron import DEFAULT_MERGE_FRACTION, Polyhedron, polyhedron
 from tactile_kb.record import ExplorationRecord
 from tactile_kb.sections import LayerSection, distinct_planes, layer_sections
 
-__all__ = ["NOISY_MERGE_FRACTION", "ObjectModel", "build_model"]
+__all__ = ["ASSUMED_TOP_DEG", "NOISY_MERGE_FRACTION", "ObjectModel", "build_model"]
+
+ASSUMED_TOP_DEG = 10.0
+"""An open model is closed by an assumed top when every open direction is within this angle
+(degrees) of +z."""
 
 NOISY_MERGE_FRACTION = 0.05
 """Vertex merge fraction of the object's smallest extent when the record declares
@@ -50,6 +63,7 @@ leave a gap of 3.5–5 % of an edge. Of the smallest extent, not the diameter: a
 heptagonal prism 29 cm tall has 1.1 cm edges (4 % of its diameter)."""
 
 T = TypeVar("T")
+FloatArray = np.ndarray[Any, np.dtype[np.float64]]
 
 
 @dataclass(frozen=True, eq=False)
@@ -83,6 +97,11 @@ class ObjectModel:
     options: dict[str, Any] = field(default_factory=dict)
     face_of: tuple[int, ...] = ()
     """For each polyhedron face, the index of its :class:`Face` in ``faces``."""
+    assumed_top: float | None = None
+    """Height (m) of the assumed top face when the top was never touched and the model was
+    closed at the highest touched point (its :class:`Face` has ``source == "assumed"`` and
+    comes last in ``faces``); None when every face was touched. The true top is at least
+    this high."""
     _derived: dict[Hashable, Any] = field(
         default_factory=dict, init=False, repr=False, compare=False
     )
@@ -139,6 +158,7 @@ def build_model(
     include_table: bool = True,
     support_tol: float | None = None,
     open_factor: float = 3.0,
+    assume_top: bool = False,
 ) -> ObjectModel:
     """Build the :class:`ObjectModel` of ``record``.
 
@@ -162,6 +182,10 @@ def build_model(
         The planes must close within this many times the radius of the touched points
         (about their centre); further out the model counts as open (nearly parallel sides
         that meet only far away mean an unexplored end).
+    assume_top
+        When the planes are open only upwards (within :data:`ASSUMED_TOP_DEG` of +z), close
+        them by a horizontal face through the highest touched point and record its height
+        in ``assumed_top``.
 
     Returns
     -------
@@ -199,6 +223,7 @@ def build_model(
         "include_table": include_table,
         "support_tol": tol,
         "open_factor": open_factor,
+        "assume_top": assume_top,
     }
     layers = layer_sections(record)
     kept = [i for i, s in enumerate(supporting) if s]
@@ -206,23 +231,65 @@ def build_model(
     if noise > 0 and merge_fraction == DEFAULT_MERGE_FRACTION and len(points) >= 4:
         merge_tol = _noisy_merge_tol(points, merge_fraction)
         options["merge_tol"] = merge_tol
-    try:
-        poly = polyhedron_from_planes(
-            normals[kept],
-            offsets[kept],
+
+    def close(normals: FloatArray, offsets: FloatArray) -> Polyhedron:
+        return polyhedron_from_planes(
+            normals,
+            offsets,
             merge_fraction=merge_fraction,
             tol=merge_tol,
             bound=_bound(points, open_factor),
             interior=points.mean(axis=0) if len(points) >= 4 else None,
         )
+
+    try:
+        poly = close(normals[kept], offsets[kept])
     except OpenModelError as exc:
+        if not (assume_top and len(points) >= 4 and _only_upwards(exc.open_directions)):
+            return ObjectModel(
+                record,
+                faces,
+                None,
+                tuple(supporting),
+                str(exc),
+                exc.open_directions,
+                layers,
+                options,
+            )
+        top = float(points[:, 2].max())
+        lid = Face((0.0, 0.0, 1.0), top, 0, 0.0, 0.0, (), False, "assumed")
+        try:
+            poly = close(np.vstack([normals[kept], [0.0, 0.0, 1.0]]), np.append(offsets[kept], top))
+        except GeometryError:  # the sides do not close under that lid either
+            return ObjectModel(
+                record,
+                faces,
+                None,
+                tuple(supporting),
+                str(exc),
+                exc.open_directions,
+                layers,
+                options,
+            )
+        faces = (*faces, lid)
+        supporting.append(True)
+        kept.append(len(faces) - 1)
+        face_of = tuple(kept[p] for p in poly.plane_index)
         return ObjectModel(
-            record, faces, None, tuple(supporting), str(exc), exc.open_directions, layers, options
+            record, faces, poly, tuple(supporting), "", [], layers, options, face_of, top
         )
     except GeometryError as exc:
         return ObjectModel(record, faces, None, tuple(supporting), str(exc), [], layers, options)
     face_of = tuple(kept[p] for p in poly.plane_index)
     return ObjectModel(record, faces, poly, tuple(supporting), "", [], layers, options, face_of)
+
+
+def _only_upwards(directions: list[tuple[float, float, float]]) -> bool:
+    """True when ``directions`` is not empty and each is within :data:`ASSUMED_TOP_DEG` of +z."""
+    c = math.cos(math.radians(ASSUMED_TOP_DEG))
+    return bool(directions) and all(
+        d[2] >= c * math.sqrt(d[0] ** 2 + d[1] ** 2 + d[2] ** 2) for d in directions
+    )
 
 
 def _noisy_merge_tol(points: np.ndarray[Any, np.dtype[np.float64]], fraction: float) -> float:

@@ -420,3 +420,41 @@ def test_curved_when_one_face_fires_sensors_far_apart() -> None:
     assert not get_feature("surface_curved").fn(model)
     assert get_feature("surface_curved").fn(changed, spread_deg=10.0)
     assert not get_feature("surface_curved").fn(changed, spread_deg=15.0)
+
+
+@pytest.mark.parametrize(
+    ("mesh", "orthogonal"),
+    [
+        (solids.box(0.08, 0.06, 0.05), True),
+        (solids.l_shape(0.12, 0.10, 0.04, 0.05), True),
+        (solids.rotate_about_z(solids.u_shape(0.14, 0.10, 0.04, 0.05), 25.0), True),
+        (
+            solids.rest_on_face(
+                trimesh.creation.cylinder(radius=0.04, height=0.05, sections=6), (0.0, 0.0, -1.0)
+            ),
+            False,
+        ),
+    ],
+    ids=["box", "L", "U turned 25°", "hexagonal prism"],
+)
+def test_orthogonal_faces_reads_every_face_the_concave_ones_too(
+    mesh: trimesh.Trimesh, orthogonal: bool
+) -> None:
+    model = build_model(sample_record(mesh, builtin_finger("33"), per_face=12, seed=2))
+    # ground truth from the mesh: every two facet normals parallel or perpendicular
+    n = np.asarray(mesh.facets_normal)
+    c = np.abs(n @ n.T)
+    assert bool(((c < 1e-6) | (c > 1 - 1e-6)).all()) is orthogonal
+    assert get_feature("orthogonal_faces").fn(model) is orthogonal
+
+
+def test_an_assumed_top_establishes_no_equal_edges() -> None:
+    rec = sample_record(solids.box(0.08, 0.08, 0.08), builtin_finger("4"), noise=0.0, seed=3)
+    closed = build_model(rec, assume_top=True)
+    assert closed.assumed_top is not None
+    assert closed.assumed_top < 0.08
+    assert get_feature("equal_edges").fn(closed) is False
+    assert get_feature("congruent_faces").fn(closed) is False
+    assert get_feature("orthogonal_faces").fn(closed) is True  # directions do not need the height
+    full = build_model(sample_record(solids.box(0.08, 0.08, 0.08), builtin_finger("33"), seed=3))
+    assert get_feature("equal_edges").fn(full) is True

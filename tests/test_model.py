@@ -106,3 +106,33 @@ def test_noisy_merge_keeps_the_short_edges_of_a_thin_prism() -> None:
     assert model.options["merge_tol"] < 0.8 * 2 * 0.0133 * np.sin(np.pi / 7)
     assert model.polyhedron is not None
     assert len(model.polyhedron.faces) == 9
+
+
+def test_assumed_top_closes_a_model_open_only_upwards() -> None:
+    rec = sample_record(solids.box(0.08, 0.06, 0.05), builtin_finger("4"), noise=0.0, seed=3)
+    touched_top = max(c.point[2] for c in rec.contacts)
+    assert build_model(rec).polyhedron is None  # the default: open, and says so
+    model = build_model(rec, assume_top=True)
+    assert model.polyhedron is not None
+    assert model.assumed_top is not None
+    assert model.faces[-1].source == "assumed"
+    assert model.faces[-1].n_contacts == 0
+    # the lid is at the highest touched point: the object is at least that tall (5 cm)
+    assert touched_top - 1e-9 <= model.assumed_top <= 0.05 + 1e-9
+    extent = np.ptp(model.polyhedron.vertices, axis=0)
+    assert np.allclose(extent[:2], [0.08, 0.06], atol=1e-3)  # the true footprint
+    assert abs(extent[2] - model.assumed_top) < 1e-6
+    assert len(model.faces) == 6
+    assert model.convex
+
+
+def test_assumed_top_only_when_the_top_alone_is_open() -> None:
+    # a box touched on three sides only: open sideways too, so no lid is assumed
+    rec = sample_record(solids.box(0.08, 0.06, 0.05), builtin_finger("4"), noise=0.0, seed=3)
+    keep = [c for c in rec.contacts if c.direction[0] > -0.5]  # drop the −x side
+    partial = rec.model_copy(update={"contacts": keep})
+    model = build_model(partial, assume_top=True)
+    assert model.polyhedron is None
+    assert model.assumed_top is None
+    assert model.open_directions
+    assert model.open_directions != [(0.0, 0.0, 1.0)]
