@@ -502,8 +502,15 @@ def lateral_edges_concurrent(
 def face_count(
     model: ObjectModel, *, equals: int | None = None, min: int | None = None, max: int | None = None
 ) -> bool:
-    """The polyhedron has ``equals`` faces (or between ``min`` and ``max``), the base included."""
-    n = len(_poly(model, "face_count").faces)
+    """The object has ``equals`` faces (or between ``min`` and ``max``), the base included.
+
+    For a convex object these are the faces of the enveloping polyhedron; for a non-convex one
+    (an object composed of boxes, whose concave faces the envelope leaves out) they are all
+    the distinct planes touched, the table (and an assumed top) included: an L-shaped block
+    has 8.
+    """
+    poly = _poly(model, "face_count")
+    n = len(poly.faces) if model.convex else len(model.faces)
     if equals is not None and n != equals:
         return False
     if min is not None and n < min:
@@ -731,6 +738,8 @@ def measure(model: ObjectModel, name: str) -> float | int | None:
             return side_count(model)
         except GeometryError:
             return None
+    if name == "faces" and not model.convex:  # as face_count counts them
+        return len(model.faces)
     return _MEASURES[name][0](model.polyhedron)
 
 

@@ -65,8 +65,8 @@ class Classification:
 
     @property
     def planes(self) -> int:
-        """Distinct planes in the model (the table included)."""
-        return len(self.model.faces)
+        """Distinct planes touched, the table included (an assumed top is not counted)."""
+        return sum(1 for f in self.model.faces if f.source != "assumed")
 
     @property
     def measures(self) -> dict[str, float | int | None]:
@@ -205,7 +205,9 @@ class _Evidence:
         rec = self.record
         key = id(rec)
         if self._model is None or self._model_of != key:
-            self._model = build_model(rec)
+            # A model open only at the top (the 4-sensor finger never feels a top) is closed
+            # at the highest touch; the model says so in ``assumed_top``.
+            self._model = build_model(rec, assume_top=True)
             self._model_of = key
         return self._model
 

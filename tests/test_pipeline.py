@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pytest
@@ -194,3 +195,46 @@ def test_solids_lying_on_a_side_keep_their_family(
         result = classify(posed, rules="polyhedra", noise=noise, seed=seed)
         assert result.decision.label == label, (noise, result.decision.bits)
         assert result.measures["sides"] == sides
+
+
+UNIONS = {
+    "L": lambda: solids.l_shape(0.1, 0.08, 0.03, 0.04),
+    "T": lambda: solids.t_shape(0.1, 0.08, 0.03, 0.04),
+    "U": lambda: solids.u_shape(0.1, 0.08, 0.03, 0.04),
+}
+
+
+@pytest.mark.parametrize("finger", ["33", "4"])
+@pytest.mark.parametrize("shape", sorted(UNIONS))
+def test_objects_composed_of_boxes(shape: str, finger: str) -> None:
+    mesh = UNIONS[shape]()
+    poly = classify(mesh, rules="polyhedra", finger=finger, noise=0.0005, seed=2)
+    assert poly.decision.label == "composed_of_boxes"
+    assert poly.decision.answer == "OBJECT IS COMPOSED OF RECTANGULAR PARALLELEPIPEDS"
+    # The paper's base has no such class; an L, T or U block has 8 or 10 faces.
+    paper = classify(mesh, finger=finger)
+    assert paper.decision.label == "not_hexahedron"
+    if finger == "4":  # it never feels a top: the model is closed at the highest touch
+        assert paper.model.assumed_top is not None
+
+
+def test_a_cube_felt_without_its_top_is_not_called_a_cube() -> None:
+    result = classify(box(0.08, 0.08, 0.08), finger="4")
+    assert result.model.assumed_top is not None
+    assert result.decision.label == "rectangular_parallelepiped"  # true: the height is unknown
+
+
+@pytest.mark.parametrize(
+    ("make", "label", "n"),
+    [
+        (lambda: solids.prism(5, 0.05, 0.08), "prism", 5),
+        (lambda: solids.prism(3, 0.06, 0.05), "prism", 3),
+        (lambda: solids.pyramid(4, 0.06, 0.08), "pyramid", 4),
+        (lambda: solids.frustum(6, 0.06, 0.035, 0.05), "frustum", 6),
+    ],
+)
+def test_polyhedra_report_the_number_of_sides(make: Any, label: str, n: int) -> None:
+    result = classify(make(), rules="polyhedra")
+    assert result.decision.label == label
+    assert result.reported == {"sides": n}
+    assert result.answer.endswith(f"(sides = {n})")
