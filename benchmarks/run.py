@@ -1,12 +1,13 @@
 """Run every benchmark and print its figures: ``make bench`` (or ``python benchmarks/run.py``).
 
-Each ``benchmarks/bench_*.py`` has a ``main()`` that prints its own figures; none fails on time.
-Name some to run only those: ``python benchmarks/run.py kb geometry``.
+Each ``benchmarks/bench_*.py`` prints its own figures when run as a script; none fails on time.
+Each runs in a process of its own, as it would alone. Name some to run only those:
+``python benchmarks/run.py kb geometry``.
 """
 
 from __future__ import annotations
 
-import importlib.util
+import subprocess
 import sys
 import time
 from pathlib import Path
@@ -16,21 +17,24 @@ HERE = Path(__file__).resolve().parent
 
 def main(argv: list[str]) -> int:
     wanted = set(argv)
-    scripts = sorted(HERE.glob("bench_*.py"))
-    for script in scripts:
-        name = script.stem.removeprefix("bench_")
+    known = {p.stem.removeprefix("bench_"): p for p in sorted(HERE.glob("bench_*.py"))}
+    unknown = sorted(wanted - set(known))
+    if unknown:
+        print(f"unknown benchmark(s): {', '.join(unknown)} (known: {', '.join(known)})")
+        return 2
+    failed = 0
+    for name, script in known.items():
         if wanted and name not in wanted:
             continue
-        spec = importlib.util.spec_from_file_location(script.stem, script)
-        assert spec is not None
-        assert spec.loader is not None
-        module = importlib.util.module_from_spec(spec)
-        spec.loader.exec_module(module)
         print(f"== {name} ({script.name})", flush=True)
         t0 = time.perf_counter()
-        module.main()
-        print(f"   [{time.perf_counter() - t0:.1f} s]\n", flush=True)
-    return 0
+        code = subprocess.run([sys.executable, str(script)], check=False).returncode
+        failed += code != 0
+        print(
+            f"   [{time.perf_counter() - t0:.1f} s{'' if code == 0 else f', exit {code}'}]\n",
+            flush=True,
+        )
+    return 1 if failed else 0
 
 
 if __name__ == "__main__":
