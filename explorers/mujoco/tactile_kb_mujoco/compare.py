@@ -14,6 +14,7 @@ Examples
 
 from __future__ import annotations
 
+import functools
 import time
 from collections.abc import Callable, Iterable, Sequence
 from dataclasses import dataclass
@@ -124,21 +125,15 @@ class SideBySide:
         return self.agreement.max_offset
 
 
-def _default_answer(record: ExplorationRecord, model: ObjectModel) -> tuple[str, str]:
-    """The pipeline's ``(label, answer)`` with the ``parallelepipeds`` rules.
-
-    For a model the planes leave open, ``"open towards (…)"`` for both.
-    """
+def _default_answer(
+    record: ExplorationRecord, model: ObjectModel, *, rules: str = "parallelepipeds"
+) -> tuple[str, str]:
+    """The pipeline's ``(label, answer)`` for ``record`` with ``rules`` (an error's text for
+    both when it cannot classify)."""
     from tactile_kb.pipeline import classify_record
 
-    if model.polyhedron is None:
-        dirs = ", ".join(
-            "(" + ", ".join(f"{c:+.2f}" for c in d) + ")" for d in sorted(model.open_directions)
-        )
-        text = f"open towards {dirs}" if dirs else f"no model: {model.open_reason}"
-        return text, text
     try:
-        decision = classify_record(record).decision
+        decision = classify_record(record, rules=rules).decision
     except TactileKBError as exc:
         text = f"{type(exc).__name__}: {exc}"
         return text, text
@@ -152,17 +147,15 @@ def compare_object(
     finger: str = "33",
     seed: int = 0,
     explorers: Sequence[str | Explorer] = ("stepper", "mujoco"),
+    rules: str = "parallelepipeds",
     answer: Callable[[ExplorationRecord, ObjectModel], tuple[str, str]] | None = None,
 ) -> SideBySide:
     """Explore ``mesh`` with both ``explorers``, classify both records, match their planes.
 
     ``answer`` maps a record and its model to ``(label, answer)`` (default: the pipeline's
-    decision with the ``parallelepipeds`` rules,
-    :func:`tactile_kb.pipeline.classify_record`; for a model the planes leave open, such as a
-    box union felt only at its sides by the 4-sensor finger, the directions in which it is
-    open).
+    decision, :func:`tactile_kb.pipeline.classify_record`, with ``rules``).
     """
-    classify = answer or _default_answer
+    classify = answer or functools.partial(_default_answer, rules=rules)
     runs = []
     for spec in explorers:
         explorer = get_explorer(spec)
