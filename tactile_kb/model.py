@@ -242,35 +242,22 @@ def build_model(
             interior=points.mean(axis=0) if len(points) >= 4 else None,
         )
 
+    def still_open(exc: OpenModelError) -> ObjectModel:
+        return ObjectModel(
+            record, faces, None, tuple(supporting), str(exc), exc.open_directions, layers, options
+        )
+
     try:
         poly = close(normals[kept], offsets[kept])
     except OpenModelError as exc:
         if not (assume_top and len(points) >= 4 and _only_upwards(exc.open_directions)):
-            return ObjectModel(
-                record,
-                faces,
-                None,
-                tuple(supporting),
-                str(exc),
-                exc.open_directions,
-                layers,
-                options,
-            )
+            return still_open(exc)
         top = float(points[:, 2].max())
         lid = Face((0.0, 0.0, 1.0), top, 0, 0.0, 0.0, (), False, "assumed")
         try:
             poly = close(np.vstack([normals[kept], [0.0, 0.0, 1.0]]), np.append(offsets[kept], top))
         except GeometryError:  # the sides do not close under that lid either
-            return ObjectModel(
-                record,
-                faces,
-                None,
-                tuple(supporting),
-                str(exc),
-                exc.open_directions,
-                layers,
-                options,
-            )
+            return still_open(exc)
         faces = (*faces, lid)
         supporting.append(True)
         kept.append(len(faces) - 1)
