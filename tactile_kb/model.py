@@ -46,11 +46,22 @@ import numpy as np
 
 from tactile_kb.errors import GeometryError, OpenModelError, UsageError
 from tactile_kb.planes import DEFAULT_SPLIT_TOL, Face, contact_arrays, merge_plane_arrays
-from tactile_kb.polyhedron import DEFAULT_MERGE_FRACTION, Polyhedron, polyhedron_from_planes
+from tactile_kb.polyhedron import (
+    DEFAULT_MERGE_FRACTION,
+    Polyhedron,
+    collapse_short_edges,
+    polyhedron_from_planes,
+)
 from tactile_kb.record import ExplorationRecord
 from tactile_kb.sections import LayerSection, distinct_planes, layer_sections
 
-__all__ = ["ASSUMED_TOP_DEG", "NOISY_MERGE_FRACTION", "ObjectModel", "build_model"]
+__all__ = [
+    "ASSUMED_TOP_DEG",
+    "COLLAPSE_SIGMAS",
+    "NOISY_MERGE_FRACTION",
+    "ObjectModel",
+    "build_model",
+]
 
 ASSUMED_TOP_DEG = 10.0
 """An open model is closed by an assumed top when every open direction is within this angle
@@ -61,6 +72,11 @@ NOISY_MERGE_FRACTION = 0.05
 contact-position noise: four or more noisy planes meeting at one vertex (an octahedron's)
 leave a gap of 3.5–5 % of an edge. Of the smallest extent, not the diameter: a thin
 heptagonal prism 29 cm tall has 1.1 cm edges (4 % of its diameter)."""
+
+COLLAPSE_SIGMAS = 4.0
+"""Edges of a noisy model shorter than this many σ of their length are collapsed: four noisy
+planes meeting at an octahedron's vertex split it into two joined by an edge of 1–4 mm
+(2–4 σ), while the shortest real edges of the test families are more than 5 σ long."""
 
 T = TypeVar("T")
 FloatArray = np.ndarray[Any, np.dtype[np.float64]]
@@ -159,6 +175,7 @@ def build_model(
     support_tol: float | None = None,
     open_factor: float = 3.0,
     assume_top: bool = False,
+    collapse_sigmas: float | None = COLLAPSE_SIGMAS,
 ) -> ObjectModel:
     """Build the :class:`ObjectModel` of ``record``.
 
@@ -186,6 +203,10 @@ def build_model(
         When the planes are open only upwards (within :data:`ASSUMED_TOP_DEG` of +z), close
         them by a horizontal face through the highest touched point and record its height
         in ``assumed_top``.
+    collapse_sigmas
+        When ``record.params["noise"]`` is positive, polyhedron edges shorter than this many
+        σ of their length (from the faces' uncertainties) are collapsed into a vertex
+        (:func:`tactile_kb.polyhedron.collapse_short_edges`); None never collapses.
 
     Returns
     -------
@@ -224,6 +245,7 @@ def build_model(
         "support_tol": tol,
         "open_factor": open_factor,
         "assume_top": assume_top,
+        "collapse_sigmas": collapse_sigmas,
     }
     layers = layer_sections(record)
     kept = [i for i, s in enumerate(supporting) if s]
@@ -232,15 +254,27 @@ def build_model(
         merge_tol = _noisy_merge_tol(points, merge_fraction)
         options["merge_tol"] = merge_tol
 
-    def close(normals: FloatArray, offsets: FloatArray) -> Polyhedron:
-        return polyhedron_from_planes(
-            normals,
-            offsets,
+    off_sigma = np.asarray([f.offset_uncertainty for f in faces], dtype=float)
+    ang_sigma = np.radians([f.normal_uncertainty_deg for f in faces])
+
+    def close(which: list[int], lid: float | None = None) -> Polyhedron:
+        n, d = normals[which], offsets[which]
+        off, ang = off_sigma[which], ang_sigma[which]
+        if lid is not None:  # an assumed horizontal top, as exact as the table
+            n, d = np.vstack([n, [0.0, 0.0, 1.0]]), np.append(d, lid)
+            off, ang = np.append(off, 0.0), np.append(ang, 0.0)
+        poly = polyhedron_from_planes(
+            n,
+            d,
             merge_fraction=merge_fraction,
             tol=merge_tol,
             bound=_bound(points, open_factor),
             interior=points.mean(axis=0) if len(points) >= 4 else None,
         )
+        if collapse_sigmas is None or noise <= 0:
+            return poly
+        at = list(poly.plane_index)
+        return collapse_short_edges(poly, off[at], ang[at], sigmas=collapse_sigmas)
 
     def still_open(exc: OpenModelError) -> ObjectModel:
         return ObjectModel(
@@ -248,14 +282,14 @@ def build_model(
         )
 
     try:
-        poly = close(normals[kept], offsets[kept])
+        poly = close(kept)
     except OpenModelError as exc:
         if not (assume_top and len(points) >= 4 and _only_upwards(exc.open_directions)):
             return still_open(exc)
         top = float(points[:, 2].max())
         lid = Face((0.0, 0.0, 1.0), top, 0, 0.0, 0.0, (), False, "assumed")
         try:
-            poly = close(np.vstack([normals[kept], [0.0, 0.0, 1.0]]), np.append(offsets[kept], top))
+            poly = close(kept, top)
         except GeometryError:  # the sides do not close under that lid either
             return still_open(exc)
         faces = (*faces, lid)

@@ -228,7 +228,8 @@ def _draw_3d(
     ax.set_ylabel("y (m)", fontsize=7, labelpad=-2)
     ax.set_zlabel("z (m)", fontsize=7, labelpad=-2)
     ax.tick_params(labelsize=5, pad=0)
-    ax.legend(loc="upper left", fontsize=6, frameon=False)
+    if ax.get_legend_handles_labels()[0]:  # an empty record draws nothing to name
+        ax.legend(loc="upper left", fontsize=6, frameon=False)
 
 
 def _block_edges(solid: SectionSolid) -> list[np.ndarray[Any, np.dtype[np.float64]]]:
@@ -381,7 +382,8 @@ def plot_classification(
     decision = getattr(result, "decision", None)
     if not isinstance(model, ObjectModel) or decision is None:
         raise UsageError("plot_classification needs a classification result (model, decision)")
-    title = f"{getattr(result, 'object', '') or model.record.object}: {decision.answer}"
+    answer = getattr(result, "answer", decision.answer)  # with its reported measures
+    title = f"{getattr(result, 'object', '') or model.record.object}: {answer}"
     title += f"  [{decision.bits}]"
     fig = plot_exploration(model, None, mesh=mesh, grasp=grasp, title=title, size=size, dpi=dpi)
     if path is not None:

@@ -39,7 +39,14 @@ from scipy.spatial import ConvexHull, HalfspaceIntersection, QhullError
 
 from tactile_kb.errors import GeometryError, OpenModelError, UsageError
 
-__all__ = ["DEFAULT_MERGE_FRACTION", "Polyhedron", "open_directions", "polyhedron_from_planes"]
+__all__ = [
+    "DEFAULT_MERGE_FRACTION",
+    "Polyhedron",
+    "collapse_short_edges",
+    "open_directions",
+    "polyhedron_from_planes",
+    "vertex_covariances",
+]
 
 FloatArray = NDArray[np.float64]
 
@@ -521,3 +528,126 @@ def _assemble(
         face_centroids=fcent,
         plane_index=plane_index,
     )
+
+
+def vertex_covariances(
+    poly: Polyhedron, offset_sigma: ArrayLike, normal_sigma_rad: ArrayLike
+) -> FloatArray:
+    """(V, 3, 3) covariance of each vertex from its faces' plane uncertainties.
+
+    Each vertex is the least-squares point of the planes of its faces; plane ``f`` is off at
+    the vertex by its offset error and its tilt error times the distance from the face's
+    centroid (``offset_sigma[f]``, ``normal_sigma_rad[f]``: 1σ, one value per face).
+    """
+    off = np.asarray(offset_sigma, dtype=float).reshape(-1)
+    ang = np.asarray(normal_sigma_rad, dtype=float).reshape(-1)
+    if off.shape != (len(poly.faces),) or ang.shape != (len(poly.faces),):
+        raise UsageError(
+            f"need one offset and one normal uncertainty per face ({len(poly.faces)}), "
+            f"got {off.shape[0]} and {ang.shape[0]}"
+        )
+    at: list[list[int]] = [[] for _ in range(len(poly.vertices))]
+    for f, face in enumerate(poly.faces):
+        for v in face:
+            at[v].append(f)
+    cov = np.zeros((len(poly.vertices), 3, 3))
+    for v, fs in enumerate(at):
+        lever = np.linalg.norm(poly.vertices[v] - poly.face_centroids[fs], axis=1)
+        var = off[fs] ** 2 + (ang[fs] * lever) ** 2
+        a = np.linalg.pinv(poly.normals[fs])
+        cov[v] = (a * var[None, :]) @ a.T
+    return cov
+
+
+def collapse_short_edges(
+    poly: Polyhedron,
+    offset_sigma: ArrayLike,
+    normal_sigma_rad: ArrayLike,
+    *,
+    sigmas: float = 4.0,
+    max_fraction: float = 0.15,
+) -> Polyhedron:
+    """``poly`` with the edges its planes' uncertainties cannot tell from a point collapsed.
+
+    Four or more noisy planes that should meet in one vertex (an octahedron's) meet in two
+    or more vertices joined by short edges, making triangles into 4- and 5-gons. An edge
+    shorter than ``sigmas`` times the 1σ uncertainty of its length (its end vertices' errors
+    along it, from :func:`vertex_covariances`) and than ``max_fraction`` of the median edge
+    length is collapsed: the vertices it joins become one, the least-squares point of all their
+    faces' planes, and the faces and edges are rebuilt.
+
+    Parameters
+    ----------
+    poly
+        The polyhedron.
+    offset_sigma, normal_sigma_rad
+        Per face of ``poly``: the 1σ offset (m) and normal (radians) uncertainty.
+    sigmas
+        How many σ an edge must be long to stay.
+    max_fraction
+        Edges at least this fraction of the median edge length always stay: σ from tilted
+        planes is large at the far ends of long faces (the top of a tall thin prism), while
+        a split vertex leaves an edge far shorter than the others.
+
+    Returns
+    -------
+    Polyhedron
+        ``poly`` itself when no edge is that short (exact planes: σ = 0) or when collapsing
+        would not give a valid polyhedron; else the collapsed one.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> n = np.vstack([np.eye(3), -np.eye(3), [[0.6, 0.8, 0.0]]])
+    >>> d = np.array([0.05, 0.05, 0.05, 0.05, 0.05, 0.05, 0.0699])  # clips one vertical edge
+    >>> p = polyhedron_from_planes(n, d, tol=0.0)
+    >>> len(p.vertices), len(p.faces)
+    (10, 7)
+    >>> q = collapse_short_edges(p, np.full(7, 1e-4), np.zeros(7))
+    >>> len(q.vertices), len(q.faces)
+    (8, 6)
+    >>> collapse_short_edges(p, np.zeros(7), np.zeros(7)) is p  # exact planes: unchanged
+    True
+    """
+    if not poly.edges:
+        return poly
+    cov = vertex_covariances(poly, offset_sigma, normal_sigma_rad)
+    e = np.asarray(poly.edges, dtype=np.intp).reshape(-1, 2)
+    lengths = poly.edge_lengths()
+    u = (poly.vertices[e[:, 1]] - poly.vertices[e[:, 0]]) / np.maximum(lengths, 1e-300)[:, None]
+    sig = np.sqrt(np.einsum("ei,eij,ej->e", u, cov[e[:, 0]] + cov[e[:, 1]], u))
+    short = (lengths < sigmas * sig) & (lengths < max_fraction * float(np.median(lengths)))
+    if not short.any():
+        return poly
+    close = np.zeros((len(poly.vertices),) * 2, dtype=bool)
+    close[e[short, 0], e[short, 1]] = close[e[short, 1], e[short, 0]] = True
+    labels = _components(close)
+    k = int(labels.max()) + 1
+    active = np.zeros((k, len(poly.faces)), dtype=bool)
+    for f, face in enumerate(poly.faces):
+        active[labels[list(face)], f] = True
+    shift = float(lengths[short].max())
+    verts = _cluster_vertices(
+        poly.vertices, labels, k, active, poly.normals, poly.offsets, 2.0 * shift
+    )
+    faces: list[tuple[int, ...]] = []
+    keep: list[int] = []
+    for f, face in enumerate(poly.faces):
+        idx = list(dict.fromkeys(int(labels[v]) for v in face))
+        if len(idx) < 3:  # the face shrank to an edge or a point
+            continue
+        order = _order_polygon(verts[idx], poly.normals[f])
+        faces.append(tuple(idx[i] for i in order))
+        keep.append(f)
+    if len(faces) < 4:
+        return poly
+    try:
+        return _assemble(
+            verts,
+            faces,
+            poly.normals[keep],
+            poly.offsets[keep],
+            tuple(poly.plane_index[f] for f in keep) if poly.plane_index else (),
+        )
+    except GeometryError:  # collapsing broke the topology: keep the polyhedron as it was
+        return poly

@@ -135,6 +135,8 @@ class ExplorationRecord(BaseModel):
             data = json.loads(text)
         except json.JSONDecodeError as exc:
             raise RecordError(f"{file}:{exc.lineno}:{exc.colno}: not JSON: {exc.msg}") from None
+        if not isinstance(data, dict):
+            raise RecordError(f"{file}: not an exploration record (expected a JSON object)")
         try:
             rec = cls.model_validate(data)
         except ValidationError as exc:
@@ -143,6 +145,10 @@ class ExplorationRecord(BaseModel):
             raise RecordError(f"{file}: {where}: {err['msg']}") from None
         if rec.version != RECORD_VERSION:
             raise RecordError(f"{file}: version {rec.version} is not supported")
+        if not rec.finger or rec.tip_radius <= 0:
+            raise RecordError(
+                f"{file}: not an exploration record (it names no finger and tip radius)"
+            )
         for c in rec.contacts:
             if not all(math.isfinite(v) for v in (*c.centre, *c.direction, *c.point)):
                 raise RecordError(f"{file}: contact at step {c.step} has a non-finite coordinate")

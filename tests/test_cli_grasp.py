@@ -159,3 +159,12 @@ def test_grasp_a_box_union_with_the_four_sensor_finger(
     line = capsys.readouterr().out.strip()
     assert "of the layer contour" in line
     assert "top not touched" in line
+
+
+@pytest.mark.parametrize("option", ["--mu", "--dpi", "--mass", "--max-opening"])
+def test_quantities_that_must_be_positive(option: str, capsys: pytest.CaptureFixture[str]) -> None:
+    assert main(["grasp", "x.stl", option, "0"]) == 2
+    assert (
+        capsys.readouterr().err.strip()
+        == f"tactile-kb grasp: argument {option}: must be > 0, got '0'"
+    )

@@ -173,3 +173,12 @@ def test_validate_checks_feature_bindings_with_the_logic(
         f"{path}:9:5: warning: propositions[2]: no feature decides proposition 'C'"
     )
     assert any(line.startswith(f"{path}:12:5: connections[0]") for line in err[2:])
+
+
+def test_query_takes_assignments_after_its_options(capsys: pytest.CaptureFixture[str]) -> None:
+    assert (
+        main(["query", "parallelepipeds", "--json", "A=1", "B=0", "C=1", "D=0", "E=1", "H=0"]) == 0
+    )
+    assert json.loads(capsys.readouterr().out)["label"] == "not_hexahedron"
+    assert main(["query", "parallelepipeds", "A=1", "--bogus"]) == 2
+    assert capsys.readouterr().err.strip() == "tactile-kb: unrecognized arguments: --bogus"

@@ -88,7 +88,9 @@ def test_noisy_octahedra_keep_six_vertices_more_often() -> None:
         # the octahedron's smallest extent (between parallel faces) is 0.08·√(2/3)
         assert tol >= NOISY_MERGE_FRACTION * 0.08 * (2 / 3) ** 0.5 * 0.95
         merged += len(model.polyhedron.vertices) == 6
-        at_exact = build_model(rec, merge_fraction=DEFAULT_MERGE_FRACTION + 1e-9).polyhedron
+        at_exact = build_model(
+            rec, merge_fraction=DEFAULT_MERGE_FRACTION + 1e-9, collapse_sigmas=None
+        ).polyhedron
         assert at_exact is not None
         split += len(at_exact.vertices) == 6
     assert merged >= 7
@@ -136,3 +138,43 @@ def test_assumed_top_only_when_the_top_alone_is_open() -> None:
     assert model.assumed_top is None
     assert model.open_directions
     assert model.open_directions != [(0.0, 0.0, 1.0)]
+
+
+def test_noisy_small_octahedra_collapse_their_split_vertices() -> None:
+    # 3–5 cm: four noisy planes at a vertex leave 1–4 mm edges, beyond the merge tolerance
+    whole = kept_split = 0
+    for seed, edge in enumerate([0.03, 0.035, 0.04, 0.045, 0.05] * 2):
+        rec = sample_record(solids.octahedron(edge), F33, per_face=10, noise=0.0005, seed=seed)
+        model = build_model(rec)
+        assert model.polyhedron is not None
+        p = model.polyhedron
+        assert len(p.vertices) - len(p.edges) + len(p.faces) == 2
+        if (len(p.vertices), len(p.edges), len(p.faces)) == (6, 12, 8):
+            whole += 1
+            assert all(len(f) == 3 for f in p.faces)
+            assert np.allclose(p.edge_lengths(), edge, rtol=0.1)
+        plain = build_model(rec, collapse_sigmas=None).polyhedron
+        assert plain is not None
+        kept_split += len(plain.vertices) > 6
+    assert whole >= 9
+    assert kept_split >= 3  # the records do split vertices the merge alone leaves
+
+
+def test_exact_records_are_not_collapsed() -> None:
+    for mesh in (solids.octahedron(0.03), solids.frustum(6, 0.015, 0.006, 0.02)):
+        rec = sample_record(mesh, F33, per_face=10, noise=0.0, seed=1)
+        a = build_model(rec).polyhedron
+        b = build_model(rec, collapse_sigmas=None).polyhedron
+        assert a is not None
+        assert b is not None
+        assert np.array_equal(a.vertices, b.vertices)
+        assert a.faces == b.faces
+
+
+def test_noisy_thin_frustum_keeps_its_short_top_edges() -> None:
+    mesh = solids.frustum(6, 0.02, 0.008, 0.03)  # top edges of 8 mm
+    rec = sample_record(mesh, F33, per_face=10, noise=0.0005, seed=2)
+    model = build_model(rec)
+    assert model.polyhedron is not None
+    assert len(model.polyhedron.faces) == 8
+    assert len(model.polyhedron.vertices) == 12

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import itertools
 import math
 import warnings
 
@@ -13,7 +14,12 @@ from hypothesis import strategies as st
 
 from tactile_kb import solids
 from tactile_kb.errors import GeometryError, OpenModelError, UsageError
-from tactile_kb.polyhedron import open_directions, polyhedron_from_planes
+from tactile_kb.polyhedron import (
+    collapse_short_edges,
+    open_directions,
+    polyhedron_from_planes,
+    vertex_covariances,
+)
 
 
 def _planes(mesh: trimesh.Trimesh) -> tuple[np.ndarray, np.ndarray]:
@@ -137,3 +143,74 @@ def test_far_vertex_outside_the_bound_is_open() -> None:
     with pytest.raises(OpenModelError, match="close only far") as info:
         polyhedron_from_planes(n, d, bound=((0, 0, 0.05), 0.3))
     assert info.value.open_directions[0][2] > 0.99
+
+
+def _clipped_box() -> tuple[np.ndarray, np.ndarray]:
+    """A 10 cm cube whose vertical edge at (+5, +5) cm is clipped 0.1 mm deep by a 7th plane."""
+    n = np.vstack([np.eye(3), -np.eye(3), [[0.6, 0.8, 0.0]]])
+    d = np.array([0.05, 0.05, 0.05, 0.05, 0.05, 0.05, 0.0699])
+    return n, d
+
+
+def test_collapse_short_edges_restores_the_unclipped_box() -> None:
+    p = polyhedron_from_planes(*_clipped_box(), tol=0.0)
+    assert (len(p.vertices), len(p.edges), len(p.faces)) == (10, 15, 7)
+    q = collapse_short_edges(p, np.full(7, 1e-4), np.zeros(7))
+    assert (len(q.vertices), len(q.edges), len(q.faces)) == (8, 12, 6)
+    corners = np.array(list(itertools.product((-0.05, 0.05), repeat=3)))
+    dist = np.linalg.norm(q.vertices[:, None, :] - corners[None, :, :], axis=2)
+    assert dist.min(axis=1).max() < 2e-4  # every vertex near a corner
+    assert dist.min(axis=0).max() < 2e-4  # every corner near a vertex
+    assert math.isclose(q.volume, 1e-3, rel_tol=1e-3)
+    assert 6 not in q.plane_index  # the clipping plane's face is gone
+    assert all(len(f) == 4 for f in q.faces)
+
+
+def test_collapse_short_edges_keeps_exact_and_long_edges() -> None:
+    p = polyhedron_from_planes(*_clipped_box(), tol=0.0)
+    assert collapse_short_edges(p, np.zeros(7), np.zeros(7)) is p  # exact planes
+    # σ large, but no edge below max_fraction of the diameter: nothing is collapsed
+    assert collapse_short_edges(p, np.full(7, 1.0), np.zeros(7), max_fraction=0.0) is p
+    box = polyhedron_from_planes(*_planes(solids.box(0.1, 0.06, 0.04)))
+    assert collapse_short_edges(box, np.full(6, 5e-4), np.full(6, 0.01)) is box
+
+
+def test_collapse_short_edges_rejects_wrong_uncertainties() -> None:
+    p = polyhedron_from_planes(*_clipped_box(), tol=0.0)
+    with pytest.raises(UsageError, match="one offset and one normal uncertainty per face"):
+        collapse_short_edges(p, np.zeros(6), np.zeros(7))
+
+
+def test_vertex_covariances_of_orthogonal_planes() -> None:
+    box = polyhedron_from_planes(*_planes(solids.box(0.1, 0.06, 0.04)))
+    # three orthogonal planes at each corner, offsets off by σ each: covariance σ²·I
+    cov = vertex_covariances(box, np.full(6, 1e-3), np.zeros(6))
+    assert np.allclose(cov, 1e-6 * np.eye(3)[None], atol=1e-15)
+    # a tilt σ_θ about the face centroid moves the plane by σ_θ·lever at the corner
+    cov = vertex_covariances(box, np.zeros(6), np.full(6, 0.01))
+    v = box.vertices[0]
+    for f, face in enumerate(box.faces):
+        if 0 in face:
+            axis = int(np.argmax(np.abs(box.normals[f])))
+            lever = np.linalg.norm(v - box.face_centroids[f])
+            assert math.isclose(cov[0][axis, axis], (0.01 * lever) ** 2, rel_tol=1e-9)
+
+
+@settings(max_examples=25, deadline=None)
+@given(
+    st.integers(0, 2**32 - 1),
+    st.floats(0.03, 0.3),
+)
+def test_noisy_octahedron_planes_collapse_to_six_vertices(seed: int, edge: float) -> None:
+    mesh = solids.octahedron(edge)
+    n, d = _planes(mesh)
+    # one plane per face (the mesh is triangles already), offsets off by σ = 0.1 % of the edge
+    rng = np.random.default_rng(seed)
+    sigma = 1e-3 * edge
+    noisy = d + rng.normal(0.0, sigma, len(d))
+    p = polyhedron_from_planes(n, noisy, tol=0.0)
+    assume(len(p.vertices) > 6)  # the noise split a vertex
+    q = collapse_short_edges(p, np.full(len(p.faces), sigma), np.zeros(len(p.faces)))
+    assert (len(q.vertices), len(q.edges), len(q.faces)) == (6, 12, 8)
+    nearest = np.linalg.norm(q.vertices[:, None, :] - mesh.vertices[None, :, :], axis=2).min(1)
+    assert nearest.max() < 10 * sigma

@@ -106,3 +106,16 @@ def test_save_failure_is_a_record_error_and_leaves_nothing(tmp_path: Path) -> No
     assert not Path("/proc/nope.json.tmp").exists()
     with pytest.raises(RecordError, match="not a regular file"):
         _record().save(tmp_path)
+
+
+@pytest.mark.parametrize(
+    ("text", "message"),
+    [
+        ("{}", "r.json: not an exploration record (it names no finger and tip radius)"),
+        ("[1, 2]", "r.json: not an exploration record (expected a JSON object)"),
+    ],
+)
+def test_json_that_is_no_record_is_refused(text: str, message: str) -> None:
+    with pytest.raises(RecordError) as info:
+        ExplorationRecord.from_json(text, file="r.json")
+    assert str(info.value) == message

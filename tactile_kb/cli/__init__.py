@@ -74,8 +74,16 @@ def report(error: TactileKBError) -> int:
 
 def main(argv: Sequence[str] | None = None) -> int:
     """Run the command line; return the exit code."""
+    parser = build_parser()
     try:
-        args = build_parser().parse_args(argv)
+        args, extra = parser.parse_known_args(argv)
+        # A subcommand may take positionals after its options (`query RULES --json A=1 B=0`):
+        # it names the list they join with ``set_defaults(interleaved="assignments")``.
+        interleaved = getattr(args, "interleaved", None)
+        if extra and interleaved and not any(e.startswith("-") for e in extra):
+            getattr(args, interleaved).extend(extra)
+        elif extra:
+            parser.error(f"unrecognized arguments: {' '.join(extra)}")
     except _ArgumentError as exc:
         print(f"{exc}", file=sys.stderr)
         return EXIT_USAGE

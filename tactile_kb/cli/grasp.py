@@ -22,6 +22,7 @@ from tactile_kb.cli.options import (
     error_line,
     nonnegative,
     picture_paths,
+    positive,
 )
 from tactile_kb.errors import TactileKBError, UsageError
 
@@ -49,7 +50,7 @@ def _picture_options(p: argparse.ArgumentParser, default: tuple[float, float]) -
         metavar="WxH",
         help=f"figure size in inches (default: {default[0]}x{default[1]})",
     )
-    p.add_argument("--dpi", type=nonnegative, default=100.0, help="dots per inch (default: 100)")
+    p.add_argument("--dpi", type=positive, default=100.0, help="dots per inch (default: 100)")
 
 
 def register(sub: argparse._SubParsersAction[Any]) -> None:
@@ -64,10 +65,10 @@ def register(sub: argparse._SubParsersAction[Any]) -> None:
         help="plan on a saved exploration record instead (repeatable)",
     )
     add_exploration_options(p)
-    p.add_argument("--mu", type=nonnegative, default=0.5, help="friction coefficient (default 0.5)")
+    p.add_argument("--mu", type=positive, default=0.5, help="friction coefficient (default 0.5)")
     p.add_argument(
         "--max-opening",
-        type=nonnegative,
+        type=positive,
         default=0.15,
         metavar="METRES",
         help="widest jaw opening of the pincers (default: 0.15)",
@@ -80,10 +81,12 @@ def register(sub: argparse._SubParsersAction[Any]) -> None:
         help="grasp points at least this far inside their faces (default: 0.005)",
     )
     p.add_argument(
-        "--mass", type=nonnegative, default=None, help="object mass, kg (default: 1000 kg/m³)"
+        "--mass", type=positive, default=None, help="object mass, kg (default: 1000 kg/m³)"
     )
     p.add_argument("--json", action="store_true", help="one JSON object per line and per object")
-    p.add_argument("--plot", metavar="FILE", help="draw each object and its grasp (PNG or SVG)")
+    p.add_argument(
+        "--plot", metavar="FILE", help="draw each object and its grasp (.png, .svg or .pdf)"
+    )
     _picture_options(p, (6.4, 4.8))
     p.set_defaults(func=_grasp)
 

@@ -44,7 +44,7 @@ def register(sub: argparse._SubParsersAction[Any]) -> None:
     p.add_argument("assignments", nargs="*", metavar="ID=0|1", help="proposition values")
     p.add_argument("--bits", help="the values as a bit string in declared order, - unknown")
     p.add_argument("--json", action="store_true", help="print the decision as JSON")
-    p.set_defaults(func=run_query)
+    p.set_defaults(func=run_query, interleaved="assignments")
 
 
 def _load(arg: str) -> RuleSet:

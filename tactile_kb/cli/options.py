@@ -15,6 +15,7 @@ __all__ = [
     "error_line",
     "nonnegative",
     "picture_paths",
+    "positive",
     "seed",
 ]
 
@@ -27,6 +28,14 @@ def nonnegative(text: str) -> float:
         raise argparse.ArgumentTypeError(f"not a number: {text!r}") from None
     if not math.isfinite(value) or value < 0:
         raise argparse.ArgumentTypeError(f"must be a finite number ≥ 0, got {text!r}")
+    return value
+
+
+def positive(text: str) -> float:
+    """An argparse type: a finite number > 0."""
+    value = nonnegative(text)
+    if value == 0:
+        raise argparse.ArgumentTypeError(f"must be > 0, got {text!r}")
     return value
 
 
