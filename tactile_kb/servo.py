@@ -637,6 +637,7 @@ class Controller:
         p = self.params
         towards = np.cross(_Z, t)
         towards = _unit(np.array([towards[0], towards[1], 0.0]))
+        blind = False
         for direction, length in ((t, p.l1), (towards, p.l2), (-t, p.l3)):
             m = self._move(pos, direction, length)
             pos = np.asarray(m.end, dtype=float)
@@ -645,14 +646,21 @@ class Controller:
                 self._record(m, nf, "touch")
                 return pos, nf
             if m.event == "blocked":
+                blind = True
                 self._note(f"blind contact (no sensor fired) at {_fmt(m.end)}")
             elif m.event == "limit":
                 self._note(f"the workspace ends at {_fmt(m.end)}")
                 return None
-        self._note(
-            f"no contact after the l1-l2-l3 cycle at z = {pos[2]:.4f} m: the object has at least "
-            f"one dimension smaller than l2 = {p.l2:g} m"
-        )
+        if blind:  # the object was met, only where no sensor feels it: no size can be inferred
+            self._note(
+                f"the l1-l2-l3 cycle at z = {pos[2]:.4f} m met the object only where no sensor "
+                f"of finger '{self.world.finger.name}' fires"
+            )
+        else:
+            self._note(
+                f"no contact after the l1-l2-l3 cycle at z = {pos[2]:.4f} m: the object has at "
+                f"least one dimension smaller than l2 = {p.l2:g} m"
+            )
         return None
 
     def _move_on(self, pos: FArray, direction: FArray, length: float) -> Motion:

@@ -352,3 +352,15 @@ def test_a_lost_closing_signal_is_recovered_by_reading_the_sensors_at_rest() -> 
     c2 = run(plain)
     assert [(k.kind, k.sensor) for k in plain.calls] == [(k.kind, k.sensor) for k in world.calls]
     assert not any("lost sensor" in n for n in c2.record(complete=True).notes)
+
+
+def test_a_cycle_that_only_meets_the_object_blindly_infers_no_size() -> None:
+    # The 4-sensor finger's sensors point along ±x, ±y with 46° cones; a square pyramid's faces
+    # face the diagonals, 29° up: 52° from every sensor, so the finger meets them blindly.
+    from tactile_kb.explorers import get_explorer
+    from tactile_kb.solids import pyramid
+
+    record = get_explorer("stepper").explore(pyramid(4, 0.04, 0.05), finger="4")
+    assert record.touches == 0
+    assert any("met the object only where no sensor of finger '4' fires" in n for n in record.notes)
+    assert not any("smaller than l2" in n for n in record.notes)
