@@ -38,6 +38,7 @@ import trimesh
 
 from tactile_kb import solids
 from tactile_kb.pipeline import classify
+from tactile_kb.synthetic import mesh_planes
 
 NOISE = 0.0005
 MAX_OVERHANG_DEG = 20.0
@@ -57,25 +58,15 @@ def _size(rng: np.random.Generator, lo: float = 0.02, hi: float = 0.30) -> float
     return round(float(math.exp(rng.uniform(math.log(lo), math.log(hi)))), 4)
 
 
-def planes(mesh: trimesh.Trimesh) -> list[tuple[np.ndarray, float]]:
-    """Distinct face planes (normal, offset) of a mesh."""
-    seen: list[tuple[np.ndarray, float]] = []
-    for n, tri in zip(mesh.face_normals, mesh.triangles, strict=True):
-        d = float(n @ tri[0])
-        if not any(float(n @ m) > 1 - 1e-6 and abs(d - e) < 1e-6 for m, e in seen):
-            seen.append((np.asarray(n), d))
-    return seen
-
-
 def faces_to_touch(mesh: trimesh.Trimesh) -> int:
     """Distinct planes except the bottom one (z = 0, normal −z)."""
-    return sum(1 for n, d in planes(mesh) if not (n[2] < -0.999 and abs(d) < 1e-9))
+    return sum(1 for n, d in mesh_planes(mesh) if not (n[2] < -0.999 and abs(d) < 1e-9))
 
 
 def overhang_deg(mesh: trimesh.Trimesh) -> float:
     """The largest angle (degrees) by which a face other than the base looks below the horizon."""
     worst = 0.0
-    for n, d in planes(mesh):
+    for n, d in mesh_planes(mesh):
         if n[2] < -0.999 and abs(d) < 1e-9:
             continue
         worst = max(worst, math.degrees(math.asin(max(0.0, -float(n[2])))))
@@ -94,7 +85,7 @@ def _stable(mesh: trimesh.Trimesh) -> bool:
 
 def rest_randomly(mesh: trimesh.Trimesh, rng: np.random.Generator) -> tuple[trimesh.Trimesh, int]:
     """``mesh`` resting on a random face it can rest on stably and the finger can feel it in."""
-    normals = [n for n, _ in planes(mesh)]
+    normals = [n for n, _ in mesh_planes(mesh)]
     order = rng.permutation(len(normals))
     for k in order:
         turned = solids.rest_on_face(mesh, normals[k])

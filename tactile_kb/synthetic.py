@@ -35,7 +35,7 @@ from tactile_kb.errors import UsageError
 from tactile_kb.finger import Finger
 from tactile_kb.record import Contact, ExplorationRecord, Layer
 
-__all__ = ["mesh_faces", "sample_layers", "sample_record"]
+__all__ = ["mesh_faces", "mesh_planes", "sample_layers", "sample_record"]
 
 FloatArray = NDArray[np.float64]
 
@@ -54,6 +54,20 @@ def mesh_faces(mesh: trimesh.Trimesh) -> list[tuple[FloatArray, list[int]]]:
     for t in np.flatnonzero(~in_facet):
         groups.append((np.asarray(mesh.face_normals[t], dtype=float), [int(t)]))
     return groups
+
+
+def mesh_planes(mesh: trimesh.Trimesh) -> list[tuple[FloatArray, float]]:
+    """The mesh's distinct planes, ``(unit outward normal, offset)`` with ``normal · x = offset``.
+
+    Triangles on one plane count once, whether adjacent or not (the ground truth a model's
+    merged planes are compared with).
+    """
+    seen: list[tuple[FloatArray, float]] = []
+    for n, tri in zip(mesh.face_normals, mesh.triangles, strict=True):
+        d = float(n @ tri[0])
+        if not any(float(n @ m) > 1 - 1e-6 and abs(d - e) < 1e-6 for m, e in seen):
+            seen.append((np.asarray(n, dtype=float), d))
+    return seen
 
 
 def _sample_in_face(

@@ -14,6 +14,7 @@ from tactile_kb import solids
 from tactile_kb.errors import UsageError
 from tactile_kb.finger import builtin_finger
 from tactile_kb.stepper import StepperExplorer, StepperWorld
+from tactile_kb.synthetic import mesh_planes
 from tactile_kb.world import CONTACT_TOL, World
 
 RHO = 0.005
@@ -196,16 +197,6 @@ def test_the_mesh_is_not_modified() -> None:
 # --- whole explorations ------------------------------------------------------------------------
 
 
-def _true_faces(mesh: trimesh.Trimesh) -> list[tuple[np.ndarray, float]]:
-    """(normal, offset) of every face of a convex mesh, from its hull's triangles."""
-    out: list[tuple[np.ndarray, float]] = []
-    for n, tri in zip(mesh.face_normals, mesh.triangles, strict=True):
-        d = float(n @ tri[0])
-        if not any(float(n @ m) > 1 - 1e-6 and abs(d - e) < 1e-6 for m, e in out):
-            out.append((np.asarray(n), d))
-    return out
-
-
 CONVEX = {
     "box": solids.box(0.08, 0.05, 0.04),
     "parallelepiped": solids.parallelepiped(0.08, 0.05, 0.04, angle_deg=70.0, shear_deg=15.0),
@@ -224,7 +215,7 @@ def test_every_feelable_face_of_a_convex_object_is_touched(name: str) -> None:
     finger = builtin_finger("33")
     rec = StepperExplorer().explore(mesh, finger=finger, seed=0)
     centres = np.asarray([c.centre for c in rec.contacts])
-    faces = _true_faces(mesh)
+    faces = mesh_planes(mesh)
     # a face is felt when its contact direction -n fires a sensor: n_z >= -sin(cone) roughly
     feelable = [(n, d) for n, d in faces if n[2] > -0.3 and not (n[2] < -0.99)]
     missed = []
@@ -312,7 +303,7 @@ def test_every_face_of_an_octahedron_has_tip_centres_at_two_heights() -> None:
     mesh = solids.rotate_about_z(solids.octahedron(0.04), 20.0)
     rec = StepperExplorer().explore(mesh, finger="33", seed=0)
     centres = np.asarray([c.centre for c in rec.contacts])
-    for n, d in _true_faces(mesh):
+    for n, d in mesh_planes(mesh):
         if n[2] < -0.99:
             continue  # the table
         on = np.abs(centres @ n - d - RHO) < 1e-6
