@@ -10,8 +10,10 @@ from typing import TYPE_CHECKING, Any
 
 from tactile_kb.cli.options import (
     add_exploration_options,
+    add_object_inputs,
     check_picture,
     error_line,
+    object_inputs,
     picture_paths,
 )
 from tactile_kb.errors import TactileKBError, UsageError
@@ -28,14 +30,7 @@ __all__ = ["register"]
 def register(sub: argparse._SubParsersAction[Any]) -> None:
     """Add ``classify``, ``explore``, ``demo`` and ``plugins``."""
     p = sub.add_parser("classify", help="explore objects by touch and name them")
-    p.add_argument("paths", nargs="*", metavar="PATH", help="mesh files (STL, OBJ, PLY), metres")
-    p.add_argument(
-        "--record",
-        action="append",
-        default=[],
-        metavar="RECORD.json",
-        help="classify a saved exploration record instead (repeatable)",
-    )
+    add_object_inputs(p, "classify")
     p.add_argument(
         "--rules",
         default="parallelepipeds",
@@ -71,8 +66,7 @@ def _emit(result: Classification, as_json: bool) -> None:
 
 
 def _classify(args: argparse.Namespace) -> int:
-    if not args.paths and not args.record:
-        raise UsageError("classify needs at least one PATH or --record RECORD.json")
+    items = object_inputs(args)
     if args.plot:
         check_picture(args.plot, "--plot")
     from tactile_kb.explorers import get_explorer
@@ -84,8 +78,6 @@ def _classify(args: argparse.Namespace) -> int:
     kb = knowledge_base(args.rules)
     explorer = get_explorer(args.explorer) if args.paths else None
     finger = load_finger(args.finger)
-    items: list[tuple[str, bool]] = [(p, False) for p in args.paths]
-    items += [(r, True) for r in args.record]
     pictures = picture_paths(args.plot, [item for item, _ in items]) if args.plot else []
     failed = 0
     for index, (item, is_record) in enumerate(items):

@@ -18,9 +18,11 @@ from typing import Any
 
 from tactile_kb.cli.options import (
     add_exploration_options,
+    add_object_inputs,
     check_picture,
     error_line,
     nonnegative,
+    object_inputs,
     picture_paths,
     positive,
 )
@@ -56,14 +58,7 @@ def _picture_options(p: argparse.ArgumentParser, default: tuple[float, float]) -
 def register(sub: argparse._SubParsersAction[Any]) -> None:
     """Add ``grasp``, ``plot`` and ``tree``."""
     p = sub.add_parser("grasp", help="explore objects and plan a two-finger grasp")
-    p.add_argument("paths", nargs="*", metavar="PATH", help="mesh files (STL, OBJ, PLY), metres")
-    p.add_argument(
-        "--record",
-        action="append",
-        default=[],
-        metavar="RECORD.json",
-        help="plan on a saved exploration record instead (repeatable)",
-    )
+    add_object_inputs(p, "plan on")
     add_exploration_options(p)
     p.add_argument("--mu", type=positive, default=0.5, help="friction coefficient (default 0.5)")
     p.add_argument(
@@ -133,13 +128,11 @@ def _grasp(args: argparse.Namespace) -> int:
     from tactile_kb.model import build_model
     from tactile_kb.record import ExplorationRecord
 
-    if not args.paths and not args.record:
-        raise UsageError("grasp needs at least one PATH or --record RECORD.json")
+    items = object_inputs(args)
     if args.plot:
         check_picture(args.plot, "--plot", args.size, args.dpi)
     explorer = get_explorer(args.explorer) if args.paths else None
     finger = load_finger(args.finger)
-    items = [(p, False) for p in args.paths] + [(r, True) for r in args.record]
     pictures = picture_paths(args.plot, [item for item, _ in items]) if args.plot else []
     failed = 0
     for index, (item, is_record) in enumerate(items):

@@ -11,9 +11,11 @@ from tactile_kb.errors import UsageError
 
 __all__ = [
     "add_exploration_options",
+    "add_object_inputs",
     "check_picture",
     "error_line",
     "nonnegative",
+    "object_inputs",
     "picture_paths",
     "positive",
     "seed",
@@ -37,6 +39,29 @@ def positive(text: str) -> float:
     if value == 0:
         raise argparse.ArgumentTypeError(f"must be > 0, got {text!r}")
     return value
+
+
+def add_object_inputs(p: argparse.ArgumentParser, what: str) -> None:
+    """``PATH...`` mesh files and ``--record RECORD.json`` (repeatable) to ``what``."""
+    p.add_argument("paths", nargs="*", metavar="PATH", help="mesh files (STL, OBJ, PLY), metres")
+    p.add_argument(
+        "--record",
+        action="append",
+        default=[],
+        metavar="RECORD.json",
+        help=f"{what} a saved exploration record instead (repeatable)",
+    )
+
+
+def object_inputs(args: argparse.Namespace) -> list[tuple[str, bool]]:
+    """The objects of a command, ``(path, is_record)``: the mesh files, then the records.
+
+    Raises :class:`UsageError` when there are none.
+    """
+    items = [(p, False) for p in args.paths] + [(r, True) for r in args.record]
+    if not items:
+        raise UsageError(f"{args.command} needs at least one PATH or --record RECORD.json")
+    return items
 
 
 def add_exploration_options(p: argparse.ArgumentParser) -> None:
