@@ -38,7 +38,7 @@ import trimesh
 
 from tactile_kb import solids
 from tactile_kb.pipeline import classify
-from tactile_kb.synthetic import mesh_planes
+from tactile_kb.touch.synthetic import mesh_planes
 
 NOISE = 0.0005
 MAX_OVERHANG_DEG = 20.0

@@ -14,7 +14,7 @@ import numpy as np
 import trimesh
 
 from tactile_kb import solids
-from tactile_kb.stepper import StepperExplorer
+from tactile_kb.touch.stepper import StepperExplorer
 
 
 def planes(mesh: trimesh.Trimesh) -> int:

@@ -37,13 +37,13 @@ from scipy.spatial import HalfspaceIntersection
 
 from tactile_kb import solids
 from tactile_kb.errors import GeometryError
-from tactile_kb.features import BUILTIN_FEATURES, face_angles, parallelism_table, section_at
-from tactile_kb.finger import builtin_finger
-from tactile_kb.model import ObjectModel, build_model
-from tactile_kb.planes import contact_arrays, merge_planes
-from tactile_kb.polyhedron import polyhedron_from_planes
+from tactile_kb.features.builtin import BUILTIN_FEATURES, face_angles, parallelism_table, section_at
+from tactile_kb.geometry.model import ObjectModel, build_model
+from tactile_kb.geometry.planes import contact_arrays, merge_planes
+from tactile_kb.geometry.polyhedron import polyhedron_from_planes
 from tactile_kb.record import ExplorationRecord
-from tactile_kb.synthetic import sample_record
+from tactile_kb.touch.finger import builtin_finger
+from tactile_kb.touch.synthetic import sample_record
 
 
 def _times_ms(fn: Callable[[], object], repeat: int) -> tuple[float, float]:

@@ -15,14 +15,14 @@ from collections.abc import Callable
 
 import numpy as np
 
-import tactile_kb.analysis
-import tactile_kb.economy
-import tactile_kb.engine  # noqa: F401 - imported up front: the figures exclude module imports
+import tactile_kb.kb.analysis
+import tactile_kb.kb.economy
+import tactile_kb.kb.engine  # noqa: F401 - imported up front: the figures exclude module imports
 from tactile_kb.cli.kb import compile_text
-from tactile_kb.compiler import BACKEND, PAPER_EXAMPLE, compile_rules
-from tactile_kb.economy import lazy_expectation
-from tactile_kb.rulegen import generate_rules
-from tactile_kb.rules import RuleSet, parse_rules
+from tactile_kb.kb.compiler import BACKEND, PAPER_EXAMPLE, compile_rules
+from tactile_kb.kb.economy import lazy_expectation
+from tactile_kb.kb.rulegen import generate_rules
+from tactile_kb.kb.rules import RuleSet, parse_rules
 
 
 def _best(fn: Callable[[], object], repeat: int) -> float:

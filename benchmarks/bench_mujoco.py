@@ -24,7 +24,7 @@ from tactile_kb_mujoco.compare import SideBySide, compare_object
 from tactile_kb_mujoco.world import MujocoWorld
 
 from tactile_kb import solids
-from tactile_kb.finger import builtin_finger
+from tactile_kb.touch.finger import builtin_finger
 
 
 def objects() -> list[tuple[str, trimesh.Trimesh, str]]:

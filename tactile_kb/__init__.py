@@ -41,45 +41,45 @@ _EXPORTS: dict[str, str] = {
         "tactile_kb.errors",
     ),
     # knowledge: rule files → compiled model → decisions
-    "RuleSet": "tactile_kb.rules",
-    "available_rule_sets": "tactile_kb.rules",
-    "load_rules": "tactile_kb.rules",
-    "parse_rules": "tactile_kb.rules",
-    "parse_expr": "tactile_kb.expr",
-    "CompiledClass": "tactile_kb.compiler",
-    "KnowledgeBase": "tactile_kb.compiler",
-    "compile_rules": "tactile_kb.compiler",
-    "Economy": "tactile_kb.economy",
-    "Decision": "tactile_kb.engine",
+    "RuleSet": "tactile_kb.kb.rules",
+    "available_rule_sets": "tactile_kb.kb.rules",
+    "load_rules": "tactile_kb.kb.rules",
+    "parse_rules": "tactile_kb.kb.rules",
+    "parse_expr": "tactile_kb.kb.expr",
+    "CompiledClass": "tactile_kb.kb.compiler",
+    "KnowledgeBase": "tactile_kb.kb.compiler",
+    "compile_rules": "tactile_kb.kb.compiler",
+    "Economy": "tactile_kb.kb.economy",
+    "Decision": "tactile_kb.kb.engine",
     # touch: finger, worlds, explorers, records
-    "Finger": "tactile_kb.finger",
-    "builtin_finger": "tactile_kb.finger",
-    "load_finger": "tactile_kb.finger",
-    "World": "tactile_kb.world",
-    "Explorer": "tactile_kb.explorers",
-    "WorldExplorer": "tactile_kb.explorers",
-    "available_explorers": "tactile_kb.explorers",
-    "get_explorer": "tactile_kb.explorers",
+    "Finger": "tactile_kb.touch.finger",
+    "builtin_finger": "tactile_kb.touch.finger",
+    "load_finger": "tactile_kb.touch.finger",
+    "World": "tactile_kb.touch.world",
+    "Explorer": "tactile_kb.touch.explorers",
+    "WorldExplorer": "tactile_kb.touch.explorers",
+    "available_explorers": "tactile_kb.touch.explorers",
+    "get_explorer": "tactile_kb.touch.explorers",
     "load_object": "tactile_kb.objects",
     "Contact": "tactile_kb.record",
     "ExplorationRecord": "tactile_kb.record",
     "Layer": "tactile_kb.record",
     "Plane": "tactile_kb.record",
-    "sample_record": "tactile_kb.synthetic",
+    "sample_record": "tactile_kb.touch.synthetic",
     # model: planes → polyhedron → features
-    "Face": "tactile_kb.planes",
-    "merge_planes": "tactile_kb.planes",
-    "Polyhedron": "tactile_kb.polyhedron",
-    "polyhedron_from_planes": "tactile_kb.polyhedron",
-    "ObjectModel": "tactile_kb.model",
-    "build_model": "tactile_kb.model",
-    "Feature": "tactile_kb.features",
-    "available_features": "tactile_kb.features",
-    "get_feature": "tactile_kb.features",
+    "Face": "tactile_kb.geometry.planes",
+    "merge_planes": "tactile_kb.geometry.planes",
+    "Polyhedron": "tactile_kb.geometry.polyhedron",
+    "polyhedron_from_planes": "tactile_kb.geometry.polyhedron",
+    "ObjectModel": "tactile_kb.geometry.model",
+    "build_model": "tactile_kb.geometry.model",
+    "Feature": "tactile_kb.features.builtin",
+    "available_features": "tactile_kb.features.builtin",
+    "get_feature": "tactile_kb.features.builtin",
     # act: grasping by the minimal angle of prehension
-    "GraspCandidate": "tactile_kb.grasp",
-    "GraspPlan": "tactile_kb.grasp",
-    "plan_grasp": "tactile_kb.grasp",
+    "GraspCandidate": "tactile_kb.grasp.planner",
+    "GraspPlan": "tactile_kb.grasp.planner",
+    "plan_grasp": "tactile_kb.grasp.planner",
     # end to end
     "Classification": "tactile_kb.pipeline",
     "classify": "tactile_kb.pipeline",
@@ -144,9 +144,6 @@ __all__ = [
 ]
 
 if TYPE_CHECKING:
-    from tactile_kb.compiler import CompiledClass, KnowledgeBase, compile_rules
-    from tactile_kb.economy import Economy
-    from tactile_kb.engine import Decision
     from tactile_kb.errors import (
         ExplorationError,
         ExpressionError,
@@ -163,20 +160,28 @@ if TYPE_CHECKING:
         TactileKBError,
         UsageError,
     )
-    from tactile_kb.explorers import Explorer, WorldExplorer, available_explorers, get_explorer
-    from tactile_kb.expr import parse_expr
-    from tactile_kb.features import Feature, available_features, get_feature
-    from tactile_kb.finger import Finger, builtin_finger, load_finger
-    from tactile_kb.grasp import GraspCandidate, GraspPlan, plan_grasp
-    from tactile_kb.model import ObjectModel, build_model
+    from tactile_kb.features.builtin import Feature, available_features, get_feature
+    from tactile_kb.geometry.model import ObjectModel, build_model
+    from tactile_kb.geometry.planes import Face, merge_planes
+    from tactile_kb.geometry.polyhedron import Polyhedron, polyhedron_from_planes
+    from tactile_kb.grasp.planner import GraspCandidate, GraspPlan, plan_grasp
+    from tactile_kb.kb.compiler import CompiledClass, KnowledgeBase, compile_rules
+    from tactile_kb.kb.economy import Economy
+    from tactile_kb.kb.engine import Decision
+    from tactile_kb.kb.expr import parse_expr
+    from tactile_kb.kb.rules import RuleSet, available_rule_sets, load_rules, parse_rules
     from tactile_kb.objects import load_object
     from tactile_kb.pipeline import Classification, classify, classify_record
-    from tactile_kb.planes import Face, merge_planes
-    from tactile_kb.polyhedron import Polyhedron, polyhedron_from_planes
     from tactile_kb.record import Contact, ExplorationRecord, Layer, Plane
-    from tactile_kb.rules import RuleSet, available_rule_sets, load_rules, parse_rules
-    from tactile_kb.synthetic import sample_record
-    from tactile_kb.world import World
+    from tactile_kb.touch.explorers import (
+        Explorer,
+        WorldExplorer,
+        available_explorers,
+        get_explorer,
+    )
+    from tactile_kb.touch.finger import Finger, builtin_finger, load_finger
+    from tactile_kb.touch.synthetic import sample_record
+    from tactile_kb.touch.world import World
 
 
 def __getattr__(name: str) -> Any:

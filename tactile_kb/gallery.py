@@ -75,12 +75,12 @@ def build_gallery(
 
     Returns the paths written, in the order of :func:`gallery_items`.
     """
-    from tactile_kb.explorers import get_explorer
-    from tactile_kb.grasp import plan_grasp
-    from tactile_kb.model import build_model
+    from tactile_kb.geometry.model import build_model
+    from tactile_kb.grasp.planner import plan_grasp
     from tactile_kb.pipeline import classify, knowledge_base
     from tactile_kb.plot import plot_classification, plot_exploration, plot_tree
     from tactile_kb.solids import fig5_objects
+    from tactile_kb.touch.explorers import get_explorer
 
     directory = Path(out)
     if not directory.is_dir():

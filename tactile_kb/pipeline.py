@@ -27,16 +27,16 @@ from functools import lru_cache
 from pathlib import Path
 from typing import Any
 
-from tactile_kb.compiler import KnowledgeBase, compile_rules
-from tactile_kb.engine import Decision
 from tactile_kb.errors import Problem, RuleFileError, UsageError
-from tactile_kb.explorers import Explorer, Goal, get_explorer
-from tactile_kb.features import check_binding, get_feature, measure, measure_names
-from tactile_kb.finger import Finger
-from tactile_kb.model import ObjectModel, build_model
+from tactile_kb.features.builtin import check_binding, get_feature, measure, measure_names
+from tactile_kb.geometry.model import ObjectModel, build_model
+from tactile_kb.kb.compiler import KnowledgeBase, compile_rules
+from tactile_kb.kb.engine import Decision
+from tactile_kb.kb.rules import RuleSet, load_rules
 from tactile_kb.objects import ObjectLike, object_name
 from tactile_kb.record import ExplorationRecord
-from tactile_kb.rules import RuleSet, load_rules
+from tactile_kb.touch.explorers import Explorer, Goal, get_explorer
+from tactile_kb.touch.finger import Finger
 
 __all__ = [
     "Classification",
@@ -252,11 +252,11 @@ def classify(
         The object: a ``trimesh.Trimesh`` or an STL/OBJ/PLY path, in metres.
     rules
         A packaged rule set name (``"parallelepipeds"``, ``"polyhedra"``), a YAML file, a
-        loaded :class:`~tactile_kb.rules.RuleSet` or a compiled KnowledgeBase.
+        loaded :class:`~tactile_kb.kb.rules.RuleSet` or a compiled KnowledgeBase.
     explorer
         An explorer name (``"stepper"``, ``"mujoco"`` when installed) or instance.
     finger
-        ``"33"``, ``"4"``, a layout YAML file or a :class:`~tactile_kb.finger.Finger`.
+        ``"33"``, ``"4"``, a layout YAML file or a :class:`~tactile_kb.touch.finger.Finger`.
     noise
         σ of the contact-position noise, metres.
     seed

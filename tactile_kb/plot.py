@@ -18,9 +18,9 @@ global state leaks between calls and nothing needs a display), returns it, and w
 
 Examples
 --------
->>> from tactile_kb.finger import builtin_finger
+>>> from tactile_kb.touch.finger import builtin_finger
 >>> from tactile_kb.solids import box
->>> from tactile_kb.synthetic import sample_record
+>>> from tactile_kb.touch.synthetic import sample_record
 >>> fig = plot_exploration(sample_record(box(0.1, 0.06, 0.04), builtin_finger("33"), seed=1))
 >>> [round(float(v)) for v in fig.get_size_inches() * fig.dpi]
 [640, 480]
@@ -44,16 +44,16 @@ from mpl_toolkits.mplot3d.art3d import (  # type: ignore[import-untyped]
 )
 
 from tactile_kb.errors import UsageError
-from tactile_kb.grasp import GraspPlan, SectionSolid
-from tactile_kb.model import ObjectModel, build_model
+from tactile_kb.geometry.model import ObjectModel, build_model
+from tactile_kb.grasp.planner import GraspPlan, SectionSolid
 from tactile_kb.record import ExplorationRecord
 
 if TYPE_CHECKING:
     import trimesh
 
-    from tactile_kb.compiler import KnowledgeBase
-    from tactile_kb.engine import Decision
-    from tactile_kb.rules import RuleSet
+    from tactile_kb.kb.compiler import KnowledgeBase
+    from tactile_kb.kb.engine import Decision
+    from tactile_kb.kb.rules import RuleSet
 
 __all__ = [
     "FORMATS",
@@ -302,7 +302,7 @@ def plot_exploration(
     mesh
         The true object, drawn faintly (a record does not carry it).
     grasp
-        A plan to draw, or True to plan one with :func:`tactile_kb.grasp.plan_grasp`.
+        A plan to draw, or True to plan one with :func:`tactile_kb.grasp.planner.plan_grasp`.
     title
         Default: the object's name, its contact and face counts.
     size, dpi
@@ -319,7 +319,7 @@ def plot_exploration(
     record = model.record
     plan: GraspPlan | None
     if grasp is True:
-        from tactile_kb.grasp import plan_grasp
+        from tactile_kb.grasp.planner import plan_grasp
 
         plan = plan_grasp(model)
     elif isinstance(grasp, GraspPlan):
@@ -527,7 +527,7 @@ def plot_tree(
     size, dpi
         Figure size (inches) and resolution.
     """
-    from tactile_kb.compiler import KnowledgeBase, compile_rules
+    from tactile_kb.kb.compiler import KnowledgeBase, compile_rules
 
     kb = rules if isinstance(rules, KnowledgeBase) else compile_rules(rules)
     if decision is None and assignment is not None:

@@ -14,7 +14,7 @@ The checks: the same seed gives the same record (with contact-position noise on)
 has the documented shape and survives a JSON round trip; the input mesh is not modified; a
 lazy session stops at the first contact and resumes to the same record as a full run; and the
 cube of the paper's Fig. 5 is classified ``OBJECT IS A CUBE`` with the ``parallelepipeds``
-rules (explore → :func:`tactile_kb.model.build_model` → features → rules).
+rules (explore → :func:`tactile_kb.geometry.model.build_model` → features → rules).
 """
 
 from __future__ import annotations
@@ -26,9 +26,9 @@ from typing import Any
 import numpy as np
 import trimesh
 
-from tactile_kb.explorers import Explorer, get_explorer
-from tactile_kb.finger import builtin_finger
 from tactile_kb.record import ExplorationRecord
+from tactile_kb.touch.explorers import Explorer, get_explorer
+from tactile_kb.touch.finger import builtin_finger
 
 __all__ = [
     "check_deterministic",
@@ -126,13 +126,13 @@ def check_lazy_session(explorer: Explorer) -> None:
 def classify_record(record: ExplorationRecord, rules: str = "parallelepipeds") -> str:
     """The class id the rule set gives to the model built from ``record``.
 
-    Uses :func:`tactile_kb.compiler.compile_rules` when available, else evaluates the rule
+    Uses :func:`tactile_kb.kb.compiler.compile_rules` when available, else evaluates the rule
     file's class expressions directly (the compiled and direct answers agree by construction).
     """
-    from tactile_kb.expr import evaluate
-    from tactile_kb.features import get_feature
-    from tactile_kb.model import build_model
-    from tactile_kb.rules import load_rules
+    from tactile_kb.features.builtin import get_feature
+    from tactile_kb.geometry.model import build_model
+    from tactile_kb.kb.expr import evaluate
+    from tactile_kb.kb.rules import load_rules
 
     model = build_model(record)
     rs = load_rules(rules)
@@ -143,7 +143,7 @@ def classify_record(record: ExplorationRecord, rules: str = "parallelepipeds") -
         feature: Any = get_feature(prop.feature.name)
         values[prop.id] = bool(feature(model, **prop.feature.params))
     try:
-        from tactile_kb.compiler import compile_rules  # type: ignore[import-not-found, unused-ignore]
+        from tactile_kb.kb.compiler import compile_rules  # type: ignore[import-not-found, unused-ignore]
     except ImportError:
         for cls in rs.classes:
             if all(name in values for name in _names(cls.expr)) and evaluate(cls.expr, values):
@@ -154,7 +154,7 @@ def classify_record(record: ExplorationRecord, rules: str = "parallelepipeds") -
 
 
 def _names(expr: Any) -> frozenset[str]:
-    from tactile_kb.expr import names
+    from tactile_kb.kb.expr import names
 
     return names(expr)
 

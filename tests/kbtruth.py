@@ -1,7 +1,7 @@
 """Ground truth for the knowledge-base tests: truth tables enumerated with numpy.
 
 Independent of the BDD compiler: every expression is evaluated on all 2ⁿ rows by
-``tactile_kb.expr.fold`` with numpy operations.
+``tactile_kb.kb.expr.fold`` with numpy operations.
 """
 
 from __future__ import annotations
@@ -10,8 +10,8 @@ from typing import Any
 
 import numpy as np
 
-from tactile_kb.expr import Expr, fold, parse_expr
-from tactile_kb.rules import RuleSet
+from tactile_kb.kb.expr import Expr, fold, parse_expr
+from tactile_kb.kb.rules import RuleSet
 
 
 def rows(n: int) -> np.ndarray[Any, Any]:

@@ -145,7 +145,7 @@ def test_an_octahedron_is_felt_whole_at_any_turn(edge: float, angle: float) -> N
 
 @pytest.mark.parametrize("seed", [0, 1, 5, 7])
 def test_a_cube_is_classified_right_despite_sensor_drop_outs(seed: int) -> None:
-    from tactile_kb.stepper import StepperExplorer
+    from tactile_kb.touch.stepper import StepperExplorer
 
     cube = _turned(solids.box(0.05, 0.05, 0.05), 20.0)
     result = classify(cube, explorer=StepperExplorer(dropout=0.05), seed=seed)

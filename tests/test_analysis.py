@@ -10,12 +10,12 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from kbtruth import r_table, table
 
-from tactile_kb.analysis import smallest_conflict
-from tactile_kb.compiler import compile_rules
 from tactile_kb.errors import Problem, RuleFileError
-from tactile_kb.expr import evaluate, parse_expr
-from tactile_kb.rulegen import rules_text
-from tactile_kb.rules import parse_rules
+from tactile_kb.kb.analysis import smallest_conflict
+from tactile_kb.kb.compiler import compile_rules
+from tactile_kb.kb.expr import evaluate, parse_expr
+from tactile_kb.kb.rulegen import rules_text
+from tactile_kb.kb.rules import parse_rules
 
 IDS = ["A", "B", "C", "D"]
 

@@ -98,7 +98,7 @@ def test_usage_errors_are_one_line(
 def test_missing_plugin_prints_its_install_hint(
     meshes: dict[str, Path], monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
 ) -> None:
-    from tactile_kb.explorers import explorer_registry
+    from tactile_kb.touch.explorers import explorer_registry
 
     monkeypatch.setattr(
         explorer_registry,

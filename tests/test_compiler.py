@@ -12,7 +12,8 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from kbtruth import bits, r_table, rows, table
 
-from tactile_kb.compiler import (
+from tactile_kb.errors import RuleFileError, UsageError
+from tactile_kb.kb.compiler import (
     EXACT_LIMIT,
     PAPER_EXAMPLE,
     compile_rules,
@@ -20,10 +21,9 @@ from tactile_kb.compiler import (
     isop,
     manager,
 )
-from tactile_kb.errors import RuleFileError, UsageError
-from tactile_kb.expr import parse_expr
-from tactile_kb.rulegen import generate_rules, rules_text
-from tactile_kb.rules import parse_rules
+from tactile_kb.kb.expr import parse_expr
+from tactile_kb.kb.rulegen import generate_rules, rules_text
+from tactile_kb.kb.rules import parse_rules
 
 BAR = "\u0304"  # the combining macron, spelled out so that no editor can precompose it
 
@@ -199,7 +199,7 @@ def test_to_dict_is_json_ready() -> None:
     "module", ["compiler", "notation", "engine", "analysis", "economy", "rulegen"]
 )
 def test_module_examples(module: str) -> None:
-    mod = importlib.import_module(f"tactile_kb.{module}")
+    mod = importlib.import_module(f"tactile_kb.kb.{module}")
     result = doctest.testmod(mod, optionflags=doctest.ELLIPSIS)
     assert result.attempted > 0
     assert result.failed == 0

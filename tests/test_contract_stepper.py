@@ -6,9 +6,9 @@ from collections.abc import Callable
 
 import pytest
 
-from tactile_kb.explorers import Explorer
-from tactile_kb.stepper import StepperExplorer
 from tactile_kb.testing import check_explorer, explorer_checks
+from tactile_kb.touch.explorers import Explorer
+from tactile_kb.touch.stepper import StepperExplorer
 
 
 @pytest.mark.parametrize(("name", "check"), explorer_checks())

@@ -12,11 +12,11 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from kbtruth import bits, labels, rows, table
 
-from tactile_kb import engine as engine_module
-from tactile_kb.compiler import PAPER_EXAMPLE, KnowledgeBase, compile_rules
-from tactile_kb.engine import INCONSISTENT, TABLE_MAX_N, UNDECIDED, ternary_closure
 from tactile_kb.errors import UsageError
-from tactile_kb.rulegen import generate_rules, rules_text
+from tactile_kb.kb import engine as engine_module
+from tactile_kb.kb.compiler import PAPER_EXAMPLE, KnowledgeBase, compile_rules
+from tactile_kb.kb.engine import INCONSISTENT, TABLE_MAX_N, UNDECIDED, ternary_closure
+from tactile_kb.kb.rulegen import generate_rules, rules_text
 
 BAR = "\u0304"
 
@@ -204,7 +204,7 @@ def test_batch_matches_per_row_truth(n: int, seed: int) -> None:
     K = len(kb.classes)
     for row, answer in zip(batch, got, strict=True):
         values = dict(zip(kb.ids, row.tolist(), strict=True))
-        from tactile_kb.expr import evaluate
+        from tactile_kb.kb.expr import evaluate
 
         if not all(evaluate(c.expr, values) for c in kb.rules.connections):
             assert answer == -1

@@ -5,7 +5,8 @@ from __future__ import annotations
 import pytest
 
 from tactile_kb.errors import PluginError, PluginUnavailableError, UsageError
-from tactile_kb.explorers import (
+from tactile_kb.testing import test_box as box
+from tactile_kb.touch.explorers import (
     MUJOCO_HINT,
     ExplorationSession,
     Explorer,
@@ -13,9 +14,8 @@ from tactile_kb.explorers import (
     explorer_registry,
     get_explorer,
 )
-from tactile_kb.servo import ServoParams
-from tactile_kb.stepper import StepperExplorer
-from tactile_kb.testing import test_box as box
+from tactile_kb.touch.servo import ServoParams
+from tactile_kb.touch.stepper import StepperExplorer
 
 
 def test_stepper_is_available_and_loads_by_name() -> None:
@@ -42,7 +42,7 @@ def test_unknown_name_lists_the_known_ones() -> None:
 
 
 def test_known_but_missing_plugin_raises_its_install_hint(monkeypatch: pytest.MonkeyPatch) -> None:
-    import tactile_kb.explorers as ex
+    import tactile_kb.touch.explorers as ex
     from tactile_kb.plugins import Registry
 
     fresh: Registry[object] = Registry("tactile_kb.explorers", "explorer", check=ex._is_explorer)

@@ -1,4 +1,4 @@
-"""Tests of tactile_kb.expr: parsing, errors with columns, printing, evaluation, folding."""
+"""Tests of tactile_kb.kb.expr: parsing, errors with columns, printing, evaluation, folding."""
 
 from __future__ import annotations
 
@@ -10,7 +10,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from tactile_kb.errors import ExpressionError, UsageError
-from tactile_kb.expr import (
+from tactile_kb.kb.expr import (
     And,
     Const,
     Equiv,

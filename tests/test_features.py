@@ -16,7 +16,7 @@ import trimesh
 
 from tactile_kb import solids
 from tactile_kb.errors import GeometryError, PluginError, UsageError
-from tactile_kb.features import (
+from tactile_kb.features.builtin import (
     BUILTIN_FEATURES,
     Feature,
     available_features,
@@ -32,9 +32,9 @@ from tactile_kb.features import (
     section_at,
     side_count,
 )
-from tactile_kb.finger import builtin_finger
-from tactile_kb.model import ObjectModel, build_model
-from tactile_kb.synthetic import sample_record
+from tactile_kb.geometry.model import ObjectModel, build_model
+from tactile_kb.touch.finger import builtin_finger
+from tactile_kb.touch.synthetic import sample_record
 
 FINGER = builtin_finger("33")
 

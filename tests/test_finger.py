@@ -11,7 +11,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from tactile_kb.errors import LayoutFileError, UsageError
-from tactile_kb.finger import Finger, builtin_finger, coverage, load_finger, load_layout
+from tactile_kb.touch.finger import Finger, builtin_finger, coverage, load_finger, load_layout
 
 
 def test_builtin_layouts() -> None:

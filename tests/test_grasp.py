@@ -13,11 +13,11 @@ import trimesh
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-import tactile_kb.grasp as grasp_module
+import tactile_kb.grasp.planner as grasp_module
 from tactile_kb.errors import UsageError
-from tactile_kb.explorers import get_explorer
-from tactile_kb.finger import builtin_finger
-from tactile_kb.grasp import (
+from tactile_kb.geometry.model import build_model
+from tactile_kb.geometry.polyhedron import polyhedron_from_planes
+from tactile_kb.grasp.planner import (
     DEFAULT_MARGIN,
     QUALITY_MEASURE,
     GraspCandidate,
@@ -29,8 +29,6 @@ from tactile_kb.grasp import (
     torque_scale,
     wrench_primitives,
 )
-from tactile_kb.model import build_model
-from tactile_kb.polyhedron import polyhedron_from_planes
 from tactile_kb.solids import (
     box,
     box_union,
@@ -44,7 +42,9 @@ from tactile_kb.solids import (
     tetrahedron,
     u_shape,
 )
-from tactile_kb.synthetic import layer_polygon, sample_layers, sample_record
+from tactile_kb.touch.explorers import get_explorer
+from tactile_kb.touch.finger import builtin_finger
+from tactile_kb.touch.synthetic import layer_polygon, sample_layers, sample_record
 
 G = 9.81
 MU = 0.5

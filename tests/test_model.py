@@ -5,11 +5,11 @@ from __future__ import annotations
 import numpy as np
 
 from tactile_kb import solids
-from tactile_kb.finger import builtin_finger
-from tactile_kb.model import NOISY_MERGE_FRACTION, build_model
-from tactile_kb.polyhedron import DEFAULT_MERGE_FRACTION
+from tactile_kb.geometry.model import NOISY_MERGE_FRACTION, build_model
+from tactile_kb.geometry.polyhedron import DEFAULT_MERGE_FRACTION
 from tactile_kb.record import ExplorationRecord
-from tactile_kb.synthetic import sample_layers, sample_record
+from tactile_kb.touch.finger import builtin_finger
+from tactile_kb.touch.synthetic import sample_layers, sample_record
 
 F33 = builtin_finger("33")
 
@@ -57,10 +57,10 @@ def test_non_convex_object_keeps_its_convex_envelope_and_layers() -> None:
 def test_derived_values_are_computed_once_per_model() -> None:
     import dataclasses
 
-    from tactile_kb.finger import builtin_finger
-    from tactile_kb.model import build_model
+    from tactile_kb.geometry.model import build_model
     from tactile_kb.solids import box
-    from tactile_kb.synthetic import sample_record
+    from tactile_kb.touch.finger import builtin_finger
+    from tactile_kb.touch.synthetic import sample_record
 
     model = build_model(sample_record(box(0.08, 0.08, 0.08), builtin_finger("33"), seed=1))
     calls: list[int] = []

@@ -10,8 +10,8 @@ from hypothesis import given
 from hypothesis import strategies as st
 from kbtruth import rows, table
 
-from tactile_kb.expr import parse_expr
-from tactile_kb.notation import (
+from tactile_kb.kb.expr import parse_expr
+from tactile_kb.kb.notation import (
     MACRON,
     Cube,
     Factored,

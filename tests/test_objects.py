@@ -187,12 +187,12 @@ def test_objects_thinner_than_the_tip_resolves_are_rejected(
 
 
 def test_explorers_reject_thin_objects_before_exploring() -> None:
-    from tactile_kb.stepper import StepperExplorer
+    from tactile_kb.touch.stepper import StepperExplorer
 
     plate = trimesh.creation.box((0.006, 0.05, 0.05))
     with pytest.raises(ObjectError, match="too thin for the finger"):
         StepperExplorer().session(plate, finger="33")
-    from tactile_kb.finger import builtin_finger
+    from tactile_kb.touch.finger import builtin_finger
 
     fine = builtin_finger("33", radius=0.003)
     assert StepperExplorer().session(plate, finger=fine).done is False

@@ -9,10 +9,10 @@ import pytest
 
 from tactile_kb import solids
 from tactile_kb.errors import UsageError
-from tactile_kb.finger import builtin_finger
-from tactile_kb.planes import cut_angle, fit_face, merge_planes
+from tactile_kb.geometry.planes import cut_angle, fit_face, merge_planes
 from tactile_kb.record import Contact, ExplorationRecord
-from tactile_kb.synthetic import sample_layers, sample_record
+from tactile_kb.touch.finger import builtin_finger
+from tactile_kb.touch.synthetic import sample_layers, sample_record
 
 F33 = builtin_finger("33")
 
@@ -92,10 +92,10 @@ def test_table_contacts_are_ignored_and_bad_options_raise() -> None:
 
 def test_merge_plane_arrays_equals_merge_planes() -> None:
     from tactile_kb.errors import UsageError
-    from tactile_kb.finger import builtin_finger
-    from tactile_kb.planes import contact_arrays, merge_plane_arrays, merge_planes
+    from tactile_kb.geometry.planes import contact_arrays, merge_plane_arrays, merge_planes
     from tactile_kb.solids import box
-    from tactile_kb.synthetic import sample_record
+    from tactile_kb.touch.finger import builtin_finger
+    from tactile_kb.touch.synthetic import sample_record
 
     rec = sample_record(box(0.1, 0.06, 0.04), builtin_finger("33"), noise=0.0005, seed=4)
     arrays = contact_arrays(rec.contacts)

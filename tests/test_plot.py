@@ -9,12 +9,10 @@ import pytest
 from matplotlib.colors import to_hex
 from PIL import Image
 
-from tactile_kb.compiler import compile_rules
 from tactile_kb.errors import UsageError
-from tactile_kb.explorers import get_explorer
-from tactile_kb.finger import builtin_finger
-from tactile_kb.grasp import plan_grasp
-from tactile_kb.model import build_model
+from tactile_kb.geometry.model import build_model
+from tactile_kb.grasp.planner import plan_grasp
+from tactile_kb.kb.compiler import compile_rules
 from tactile_kb.plot import (
     TreeNode,
     choice_tree,
@@ -25,7 +23,9 @@ from tactile_kb.plot import (
 )
 from tactile_kb.record import ExplorationRecord
 from tactile_kb.solids import box, l_shape
-from tactile_kb.synthetic import sample_record
+from tactile_kb.touch.explorers import get_explorer
+from tactile_kb.touch.finger import builtin_finger
+from tactile_kb.touch.synthetic import sample_record
 
 
 def _png(path: Path) -> np.ndarray:

@@ -9,12 +9,12 @@ import pytest
 import trimesh
 
 from tactile_kb import solids
-from tactile_kb.expr import evaluate
-from tactile_kb.features import check_binding, get_feature
-from tactile_kb.finger import builtin_finger
-from tactile_kb.model import ObjectModel, build_model
-from tactile_kb.rules import RuleSet, load_rules
-from tactile_kb.synthetic import sample_record
+from tactile_kb.features.builtin import check_binding, get_feature
+from tactile_kb.geometry.model import ObjectModel, build_model
+from tactile_kb.kb.expr import evaluate
+from tactile_kb.kb.rules import RuleSet, load_rules
+from tactile_kb.touch.finger import builtin_finger
+from tactile_kb.touch.synthetic import sample_record
 
 RULES = load_rules("polyhedra")
 FINGER = builtin_finger("33")

@@ -14,7 +14,7 @@ from hypothesis import strategies as st
 
 from tactile_kb import solids
 from tactile_kb.errors import GeometryError, OpenModelError, UsageError
-from tactile_kb.polyhedron import (
+from tactile_kb.geometry.polyhedron import (
     collapse_short_edges,
     open_directions,
     polyhedron_from_planes,

@@ -1,4 +1,4 @@
-"""Tests of tactile_kb.rules: loading, every located error kind, the packaged knowledge base."""
+"""Tests of tactile_kb.kb.rules: loading, every located error kind, the packaged knowledge base."""
 
 from __future__ import annotations
 
@@ -9,8 +9,8 @@ import pytest
 import trimesh
 
 from tactile_kb.errors import RuleFileError, UsageError
-from tactile_kb.expr import And, Not, Var, evaluate, parse_expr
-from tactile_kb.rules import (
+from tactile_kb.kb.expr import And, Not, Var, evaluate, parse_expr
+from tactile_kb.kb.rules import (
     FeatureBinding,
     RuleSet,
     available_rule_sets,
@@ -721,10 +721,10 @@ def test_cube_is_the_papers_single_conjunction_over_a_to_g(kb: RuleSet) -> None:
 def _classify_mesh(
     kb: RuleSet, mesh: trimesh.Trimesh, *, quantise: bool
 ) -> tuple[str, list[str], list[str]]:
-    from tactile_kb.features import get_feature
-    from tactile_kb.finger import builtin_finger
-    from tactile_kb.model import build_model
-    from tactile_kb.synthetic import sample_record
+    from tactile_kb.features.builtin import get_feature
+    from tactile_kb.geometry.model import build_model
+    from tactile_kb.touch.finger import builtin_finger
+    from tactile_kb.touch.synthetic import sample_record
 
     record = sample_record(mesh, builtin_finger("33"), per_face=12, seed=3, quantise=quantise)
     model = build_model(record)
@@ -738,7 +738,7 @@ def _classify_mesh(
 
 
 def test_packaged_feature_bindings_are_valid(kb: RuleSet) -> None:
-    from tactile_kb.features import check_binding
+    from tactile_kb.features.builtin import check_binding
 
     for p in kb.propositions:
         assert p.feature is not None
@@ -776,7 +776,7 @@ def test_other_solids_get_their_geometrically_right_class(kb: RuleSet) -> None:
 
 
 def test_packaged_base_compiles_cleanly_with_the_papers_cube(kb: RuleSet) -> None:
-    from tactile_kb.compiler import compile_rules
+    from tactile_kb.kb.compiler import compile_rules
 
     compiled = compile_rules(kb)
     assert compiled.problems == ()  # no dead class, overlap, gap or redundant connection

@@ -10,17 +10,17 @@ import shapely.geometry
 
 from tactile_kb import solids
 from tactile_kb.errors import UsageError
-from tactile_kb.finger import builtin_finger
-from tactile_kb.polyhedron import polyhedron_from_planes
-from tactile_kb.record import Contact
-from tactile_kb.sections import (
+from tactile_kb.geometry.polyhedron import polyhedron_from_planes
+from tactile_kb.geometry.sections import (
     contour_from_contacts,
     cross_section,
     distinct_planes,
     layer_sections,
     polygon_area,
 )
-from tactile_kb.synthetic import layer_polygon, sample_layers
+from tactile_kb.record import Contact
+from tactile_kb.touch.finger import builtin_finger
+from tactile_kb.touch.synthetic import layer_polygon, sample_layers
 
 
 def test_cross_section_of_a_pyramid_scales_with_height() -> None:

@@ -9,9 +9,9 @@ import numpy as np
 import pytest
 
 from tactile_kb.errors import ExplorationError, UsageError
-from tactile_kb.finger import Finger, builtin_finger
-from tactile_kb.servo import Controller, ServoParams
-from tactile_kb.world import Box, Event, Motion, Vec3, Workspace
+from tactile_kb.touch.finger import Finger, builtin_finger
+from tactile_kb.touch.servo import Controller, ServoParams
+from tactile_kb.touch.world import Box, Event, Motion, Vec3, Workspace
 
 
 @dataclass
@@ -357,8 +357,8 @@ def test_a_lost_closing_signal_is_recovered_by_reading_the_sensors_at_rest() -> 
 def test_a_cycle_that_only_meets_the_object_blindly_infers_no_size() -> None:
     # The 4-sensor finger's sensors point along ±x, ±y with 46° cones; a square pyramid's faces
     # face the diagonals, 29° up: 52° from every sensor, so the finger meets them blindly.
-    from tactile_kb.explorers import get_explorer
     from tactile_kb.solids import pyramid
+    from tactile_kb.touch.explorers import get_explorer
 
     record = get_explorer("stepper").explore(pyramid(4, 0.04, 0.05), finger="4")
     assert record.touches == 0

@@ -12,10 +12,10 @@ from hypothesis import strategies as st
 
 from tactile_kb import solids
 from tactile_kb.errors import UsageError
-from tactile_kb.finger import builtin_finger
-from tactile_kb.stepper import StepperExplorer, StepperWorld
-from tactile_kb.synthetic import mesh_planes
-from tactile_kb.world import CONTACT_TOL, World
+from tactile_kb.touch.finger import builtin_finger
+from tactile_kb.touch.stepper import StepperExplorer, StepperWorld
+from tactile_kb.touch.synthetic import mesh_planes
+from tactile_kb.touch.world import CONTACT_TOL, World
 
 RHO = 0.005
 
@@ -266,7 +266,7 @@ def test_a_hexahedron_is_explored_fast_with_few_touches() -> None:
 @given(st.integers(0, 2**32 - 1))
 @settings(max_examples=20, deadline=None)
 def test_closest_points_are_those_of_trimesh(seed: int) -> None:
-    from tactile_kb.stepper import _closest
+    from tactile_kb.touch.stepper import _closest
 
     rng = np.random.default_rng(seed)
     tri = rng.normal(size=(200, 3, 3))
@@ -317,7 +317,7 @@ def test_every_face_of_an_octahedron_has_tip_centres_at_two_heights() -> None:
 @pytest.mark.parametrize("turn", [0.0, 5.0, 90.0, 12.0, 37.0, 200.0])
 def test_the_4_sensor_finger_refuses_objects_turned_away_from_its_sensors(turn: float) -> None:
     from tactile_kb.errors import ExplorationError
-    from tactile_kb.finger import ALIGN_4_DEG
+    from tactile_kb.touch.finger import ALIGN_4_DEG
 
     # ground truth: the L's faces are turned from the x/y sensors by the turn modulo 90°
     off = min(turn % 90.0, 90.0 - turn % 90.0)

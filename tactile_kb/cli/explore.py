@@ -69,10 +69,10 @@ def _classify(args: argparse.Namespace) -> int:
     items = object_inputs(args)
     if args.plot:
         check_picture(args.plot, "--plot")
-    from tactile_kb.explorers import get_explorer
-    from tactile_kb.finger import load_finger
     from tactile_kb.pipeline import classify, classify_record, knowledge_base
     from tactile_kb.record import ExplorationRecord
+    from tactile_kb.touch.explorers import get_explorer
+    from tactile_kb.touch.finger import load_finger
 
     # Everything shared by the objects is checked before the first one is touched.
     kb = knowledge_base(args.rules)
@@ -114,8 +114,8 @@ def _explore(args: argparse.Namespace) -> int:
     out = Path(args.out)
     if not out.parent.exists():
         raise UsageError(f"--out {args.out}: directory {str(out.parent)!r} does not exist")
-    from tactile_kb.explorers import get_explorer
-    from tactile_kb.finger import load_finger
+    from tactile_kb.touch.explorers import get_explorer
+    from tactile_kb.touch.finger import load_finger
 
     explorer = get_explorer(args.explorer)
     record = explorer.explore(
@@ -130,9 +130,9 @@ def _explore(args: argparse.Namespace) -> int:
 
 
 def _demo(args: argparse.Namespace) -> int:
-    from tactile_kb.explorers import get_explorer
     from tactile_kb.pipeline import classify, knowledge_base
     from tactile_kb.solids import fig5_objects
+    from tactile_kb.touch.explorers import get_explorer
 
     kb = knowledge_base("parallelepipeds")
     explorer = get_explorer(args.explorer)
@@ -152,8 +152,8 @@ def _demo(args: argparse.Namespace) -> int:
 
 
 def _plugins(args: argparse.Namespace) -> int:
-    from tactile_kb.explorers import available_explorers, explorer_registry
-    from tactile_kb.features import feature_registry
+    from tactile_kb.features.builtin import feature_registry
+    from tactile_kb.touch.explorers import available_explorers, explorer_registry
 
     available_explorers()  # registers the built-in in an uninstalled checkout
     for kind, registry in (("explorer", explorer_registry), ("feature", feature_registry())):

@@ -122,11 +122,11 @@ def _line(plan: Any) -> str:
 
 
 def _grasp(args: argparse.Namespace) -> int:
-    from tactile_kb.explorers import get_explorer
-    from tactile_kb.finger import load_finger
-    from tactile_kb.grasp import plan_grasp
-    from tactile_kb.model import build_model
+    from tactile_kb.geometry.model import build_model
+    from tactile_kb.grasp.planner import plan_grasp
     from tactile_kb.record import ExplorationRecord
+    from tactile_kb.touch.explorers import get_explorer
+    from tactile_kb.touch.finger import load_finger
 
     items = object_inputs(args)
     if args.plot:
@@ -192,7 +192,7 @@ def _plot(args: argparse.Namespace) -> int:
 
 
 def _tree(args: argparse.Namespace) -> int:
-    from tactile_kb.compiler import compile_rules
+    from tactile_kb.kb.compiler import compile_rules
     from tactile_kb.plot import plot_tree
 
     check_picture(args.out, "--out", args.size, args.dpi)

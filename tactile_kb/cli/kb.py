@@ -17,10 +17,10 @@ import sys
 from pathlib import Path
 from typing import Any
 
-from tactile_kb.compiler import KnowledgeBase, compile_rules
-from tactile_kb.engine import Decision
 from tactile_kb.errors import Problem, RuleFileError, UsageError
-from tactile_kb.rules import RuleSet, load_rules
+from tactile_kb.kb.compiler import KnowledgeBase, compile_rules
+from tactile_kb.kb.engine import Decision
+from tactile_kb.kb.rules import RuleSet, load_rules
 
 __all__ = ["register"]
 

@@ -1,8 +1,8 @@
 """tactile-kb-mujoco: the MuJoCo explorer plugin of tactile_kb.
 
-The finger of :mod:`tactile_kb.finger` becomes a MuJoCo body on three motor-driven slide
+The finger of :mod:`tactile_kb.touch.finger` becomes a MuJoCo body on three motor-driven slide
 joints with one touch sensor per tactile sensor; the object becomes fixed convex geoms; the
-shared servo controller of :mod:`tactile_kb.servo` drives it and fills the same
+shared servo controller of :mod:`tactile_kb.touch.servo` drives it and fills the same
 :class:`~tactile_kb.record.ExplorationRecord` as the analytic ``stepper``.
 """
 

@@ -1,7 +1,7 @@
 """Side by side: the analytic ``stepper`` and the ``mujoco`` explorer on the same objects.
 
 For each object both explorers run with the same finger and seed; each record goes through the
-same downstream chain (:func:`tactile_kb.model.build_model`, the features, the rules), and the
+same downstream chain (:func:`tactile_kb.geometry.model.build_model`, the features, the rules), and the
 two models' planes are matched one to one (Hungarian assignment on normal angle and offset).
 
 Examples
@@ -24,9 +24,9 @@ import trimesh
 from scipy.optimize import linear_sum_assignment
 
 from tactile_kb.errors import TactileKBError
-from tactile_kb.explorers import Explorer, get_explorer
-from tactile_kb.model import ObjectModel, build_model
+from tactile_kb.geometry.model import ObjectModel, build_model
 from tactile_kb.record import ExplorationRecord
+from tactile_kb.touch.explorers import Explorer, get_explorer
 
 __all__ = [
     "ExplorerRun",

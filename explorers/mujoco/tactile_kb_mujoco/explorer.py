@@ -1,12 +1,12 @@
 """The ``mujoco`` explorer: the shared servo controller driving a :class:`MujocoWorld`.
 
 Registered in the entry-point group ``tactile_kb.explorers`` as ``mujoco``, so
-``tactile_kb.explorers.get_explorer("mujoco")`` and ``tactile-kb classify ... --explorer
+``tactile_kb.touch.explorers.get_explorer("mujoco")`` and ``tactile-kb classify ... --explorer
 mujoco`` find it once this distribution is installed.
 
 Examples
 --------
->>> from tactile_kb.explorers import get_explorer
+>>> from tactile_kb.touch.explorers import get_explorer
 >>> explorer = get_explorer("mujoco")
 >>> type(explorer).__name__, explorer.name
 ('MujocoExplorer', 'mujoco')
@@ -16,15 +16,15 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING
 
-from tactile_kb.explorers import WorldExplorer
-from tactile_kb.finger import Finger
+from tactile_kb.touch.explorers import WorldExplorer
+from tactile_kb.touch.finger import Finger
 from tactile_kb_mujoco.scene import SceneOptions
 from tactile_kb_mujoco.world import MujocoWorld
 
 if TYPE_CHECKING:
     import trimesh
 
-    from tactile_kb.servo import ServoParams
+    from tactile_kb.touch.servo import ServoParams
 
 __all__ = ["MujocoExplorer"]
 
@@ -35,7 +35,7 @@ class MujocoExplorer(WorldExplorer):
     Parameters
     ----------
     params
-        Servo parameters (:class:`tactile_kb.servo.ServoParams`); the defaults suit 2–30 cm
+        Servo parameters (:class:`tactile_kb.touch.servo.ServoParams`); the defaults suit 2–30 cm
         objects.
     speed
         Motor speed along a motion, m/s.

@@ -5,7 +5,7 @@ The scene mirrors the analytic stepper's world:
 * the **finger** is a body on three slide joints ``x``, ``y``, ``z`` driven by three
   position actuators ``Mx``, ``My``, ``Mz`` (the paper's motors), its weight compensated
   (``gravcomp="1"``); its tip is a frictionless sphere geom of radius ρ (``finger.radius``)
-  with a contact margin of :data:`tactile_kb.world.CONTACT_TOL`, so a tip whose centre is
+  with a contact margin of :data:`tactile_kb.touch.world.CONTACT_TOL`, so a tip whose centre is
   within ρ + margin of the object is in contact and pressed, as the protocol defines contact
   (a soft contact makes force only once the margin is crossed);
 * each **tactile sensor** ``i`` is a sphere site ``s{i}`` centred on the tip surface at
@@ -24,7 +24,7 @@ The scene mirrors the analytic stepper's world:
 Examples
 --------
 >>> import trimesh
->>> from tactile_kb.finger import builtin_finger
+>>> from tactile_kb.touch.finger import builtin_finger
 >>> from tactile_kb_mujoco.parts import convex_parts
 >>> xml = scene_xml(builtin_finger("4"), convex_parts(trimesh.creation.box((0.04, 0.04, 0.04))))
 >>> xml.count("<touch "), xml.count('type="slide"'), xml.count("<position ")
@@ -40,8 +40,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from tactile_kb.finger import Finger
-from tactile_kb.world import CONTACT_TOL
+from tactile_kb.touch.finger import Finger
+from tactile_kb.touch.world import CONTACT_TOL
 from tactile_kb_mujoco.parts import ConvexPart
 
 __all__ = ["SceneOptions", "scene_xml", "site_radius"]

@@ -1,4 +1,4 @@
-"""The MuJoCo world: :class:`tactile_kb.world.World` on top of a physics simulation.
+"""The MuJoCo world: :class:`tactile_kb.touch.world.World` on top of a physics simulation.
 
 The finger is driven by its three motors (position actuators on slide joints x, y, z) and
 MuJoCo steps the dynamics; the tactile sensors are MuJoCo ``<touch>`` sensors (a sensor is ON
@@ -23,14 +23,14 @@ as the analytic world keeps the tip at distance ρ.
 
 Contacts are read from MuJoCo's contact list: the tip is *in contact* with a surface when its
 distance is below the tip's margin (:class:`~tactile_kb_mujoco.scene.SceneOptions`), which is
-:data:`tactile_kb.world.CONTACT_TOL`. A motion is *blocked* where the tip would penetrate
-the object by more than :data:`tactile_kb.stepper.BLOCK_TOL` without a change of the fired set
+:data:`tactile_kb.touch.world.CONTACT_TOL`. A motion is *blocked* where the tip would penetrate
+the object by more than :data:`tactile_kb.touch.stepper.BLOCK_TOL` without a change of the fired set
 (a blind contact), as in the analytic world.
 
 Examples
 --------
 >>> from tactile_kb import solids
->>> from tactile_kb.finger import builtin_finger
+>>> from tactile_kb.touch.finger import builtin_finger
 >>> world = MujocoWorld(solids.box(0.04, 0.04, 0.04), builtin_finger("4"))
 >>> m = world.move((-0.05, 0.0, 0.02), (1.0, 0.0, 0.0), 0.1)
 >>> m.event, m.closed, round(m.end[0], 6)
@@ -50,9 +50,9 @@ import trimesh
 from numpy.typing import NDArray
 
 from tactile_kb.errors import ObjectError, UsageError
-from tactile_kb.finger import Finger
-from tactile_kb.stepper import BLOCK_TOL, default_workspace
-from tactile_kb.world import Box, Event, Motion, MotionKind, Vec3, Workspace
+from tactile_kb.touch.finger import Finger
+from tactile_kb.touch.stepper import BLOCK_TOL, default_workspace
+from tactile_kb.touch.world import Box, Event, Motion, MotionKind, Vec3, Workspace
 from tactile_kb_mujoco.parts import MAX_HULL_VERTICES, ConvexPart, convex_parts
 from tactile_kb_mujoco.scene import SceneOptions, scene_xml
 
@@ -101,7 +101,7 @@ class MujocoWorld:
         What error messages call the object.
     workspace
         The motors' range (default: the analytic world's,
-        :func:`tactile_kb.stepper.default_workspace`).
+        :func:`tactile_kb.touch.stepper.default_workspace`).
     hint_margin
         How much the :attr:`hint` box exceeds the object's bounds, metres (as the analytic
         world).
@@ -334,7 +334,7 @@ class MujocoWorld:
     def _event(self, ref: _Probe, probe: _Probe, *, physical: bool = False) -> bool:
         """Whether a motion must stop at ``probe``: the fired set differs from ``ref``'s, or
         (on the commanded line) the tip would penetrate the object by more than
-        :data:`tactile_kb.stepper.BLOCK_TOL`, as in the analytic world.
+        :data:`tactile_kb.touch.stepper.BLOCK_TOL`, as in the analytic world.
 
         ``physical`` samples (the finger where the dynamics put it) are pressed into the
         surface on purpose during a slide: only a change of the fired set counts for them.

@@ -9,9 +9,9 @@ from tactile_kb_mujoco import MujocoExplorer
 from tactile_kb_mujoco.compare import compare_object
 
 from tactile_kb import solids
-from tactile_kb.explorers import available_explorers, get_explorer
 from tactile_kb.record import ExplorationRecord
 from tactile_kb.testing import explorer_checks
+from tactile_kb.touch.explorers import available_explorers, get_explorer
 
 ANGLE_TOL_DEG = 0.01
 """Matched planes of the two explorers differ by less than this angle..."""

@@ -15,8 +15,8 @@ from tactile_kb_mujoco.scene import SceneOptions, scene_xml, site_radius
 from tactile_kb_mujoco.world import MujocoWorld
 
 from tactile_kb import solids
-from tactile_kb.finger import builtin_finger
-from tactile_kb.world import CONTACT_TOL
+from tactile_kb.touch.finger import builtin_finger
+from tactile_kb.touch.world import CONTACT_TOL
 
 
 @pytest.mark.parametrize("layout", ["4", "33"])

@@ -13,9 +13,9 @@ from tactile_kb_mujoco.world import MujocoWorld
 
 from tactile_kb import solids
 from tactile_kb.errors import ObjectError, UsageError
-from tactile_kb.finger import builtin_finger
-from tactile_kb.stepper import StepperWorld
-from tactile_kb.world import CONTACT_TOL, World
+from tactile_kb.touch.finger import builtin_finger
+from tactile_kb.touch.stepper import StepperWorld
+from tactile_kb.touch.world import CONTACT_TOL, World
 
 RHO = 0.005
 F4 = builtin_finger("4")

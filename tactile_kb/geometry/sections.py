@@ -10,7 +10,7 @@ layers (seven, P1…P7, in Fig. 1).
 Examples
 --------
 >>> import numpy as np
->>> from tactile_kb.polyhedron import polyhedron_from_planes
+>>> from tactile_kb.geometry.polyhedron import polyhedron_from_planes
 >>> box = polyhedron_from_planes(np.vstack([np.eye(3), -np.eye(3)]), [0.05, 0.03, 0.04, 0.05, 0.03, 0.0])
 >>> s = cross_section(box, 0.02)
 >>> len(s), round(polygon_area(s) * 1e4, 6)
@@ -28,7 +28,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from tactile_kb.errors import UsageError
-from tactile_kb.polyhedron import Polyhedron
+from tactile_kb.geometry.polyhedron import Polyhedron
 from tactile_kb.record import Contact, ExplorationRecord
 
 __all__ = [

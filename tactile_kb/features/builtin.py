@@ -3,11 +3,11 @@
 "Computer calculations give other information, such as cross-sections, angles between
 planes, existence of parallelism and perpendicularity, etc., which form propositions for
 object identifications." A feature is a function ``fn(model, **params) -> bool`` of an
-:class:`~tactile_kb.model.ObjectModel`; rule files name it (``feature: surface_plane`` or
+:class:`~tactile_kb.geometry.model.ObjectModel`; rule files name it (``feature: surface_plane`` or
 ``feature: {name: face_count, params: {equals: 6}}``).
 
 Features live in a registry filled from the entry-point group ``tactile_kb.features``; the
-built-ins join it the same way (``builtin = "tactile_kb.features:BUILTIN_FEATURES"``), and a
+built-ins join it the same way (``builtin = "tactile_kb.features.builtin:BUILTIN_FEATURES"``), and a
 third-party package adds its own by exposing a :class:`Feature` (or a mapping of them).
 
 Every threshold is a keyword parameter with a default that works for the 33-sensor finger
@@ -47,10 +47,10 @@ the faces within ``horizontal_deg`` of −z and +z; on its base, the base is the
 
 Examples
 --------
->>> from tactile_kb.finger import builtin_finger
->>> from tactile_kb.model import build_model
+>>> from tactile_kb.touch.finger import builtin_finger
+>>> from tactile_kb.geometry.model import build_model
 >>> from tactile_kb.solids import box
->>> from tactile_kb.synthetic import sample_record
+>>> from tactile_kb.touch.synthetic import sample_record
 >>> model = build_model(sample_record(box(0.08, 0.08, 0.08), builtin_finger("33"), per_face=12, seed=4))
 >>> [get_feature(n).fn(model) for n in ("contact", "surface_plane", "lateral_edges_parallel", "equal_edges")]
 [True, True, True, True]
@@ -73,10 +73,10 @@ import numpy as np
 from numpy.typing import NDArray
 
 from tactile_kb.errors import GeometryError, PluginError, UsageError
-from tactile_kb.model import ObjectModel
+from tactile_kb.geometry.model import ObjectModel
+from tactile_kb.geometry.polyhedron import Polyhedron
+from tactile_kb.geometry.sections import cross_section
 from tactile_kb.plugins import Registry
-from tactile_kb.polyhedron import Polyhedron
-from tactile_kb.sections import cross_section
 
 __all__ = [
     "BUILTIN_FEATURES",
@@ -581,7 +581,7 @@ def edge_uncertainties(model: ObjectModel) -> FloatArray:
 
     Each vertex is the least-squares point of the planes meeting there; each plane's error
     at the vertex combines its offset uncertainty and its normal uncertainty times the
-    distance from the face's centre (:class:`~tactile_kb.planes.Face` reports both), and the
+    distance from the face's centre (:class:`~tactile_kb.geometry.planes.Face` reports both), and the
     two end vertices' errors along the edge add in quadrature. Exact planes give 0.
     """
     return _edge_sigmas(model).copy()
@@ -792,7 +792,7 @@ def feature_registry() -> Registry[Feature]:
     if not _BUILTINS_CHECKED:
         _BUILTINS_CHECKED = True
         declared = any(
-            ep.value == "tactile_kb.features:BUILTIN_FEATURES"
+            ep.value == "tactile_kb.features.builtin:BUILTIN_FEATURES"
             for ep in entry_points(group="tactile_kb.features")
         )
         if not declared:  # a source checkout that is not installed: register them from code

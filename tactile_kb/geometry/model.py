@@ -3,9 +3,9 @@
 "If the object is scanned by being touched at more points, we can have the assembly of all
 surface equations of the enveloping polyhedron, which gives us the mathematical model of the
 object." :func:`build_model` takes an exploration record through the whole chain — contacts →
-one plane per face (:mod:`tactile_kb.planes`) → the enveloping polyhedron
-(:mod:`tactile_kb.polyhedron`) → layer contours for non-convex objects
-(:mod:`tactile_kb.sections`) — and returns an :class:`ObjectModel`, the value the feature
+one plane per face (:mod:`tactile_kb.geometry.planes`) → the enveloping polyhedron
+(:mod:`tactile_kb.geometry.polyhedron`) → layer contours for non-convex objects
+(:mod:`tactile_kb.geometry.sections`) — and returns an :class:`ObjectModel`, the value the feature
 extractors read.
 
 A face whose plane has touched points of the object outside it is *concave* (the inner sides
@@ -16,13 +16,13 @@ A partial record (an unexplored side) gives ``polyhedron=None`` and ``open_reaso
 whose sensors lie on the equator, never feels a top face, and contour following of a U-shaped
 block does not reach it either. Then the model is closed by an *assumed top*, the horizontal plane through the highest touched
 point (the object reaches at least that high), recorded as ``assumed_top``: features that
-depend on the true height must not trust it (see :func:`tactile_kb.features.equal_edges`).
+depend on the true height must not trust it (see :func:`tactile_kb.features.builtin.equal_edges`).
 
 Examples
 --------
->>> from tactile_kb.finger import builtin_finger
+>>> from tactile_kb.touch.finger import builtin_finger
 >>> from tactile_kb.solids import box
->>> from tactile_kb.synthetic import sample_record
+>>> from tactile_kb.touch.synthetic import sample_record
 >>> model = build_model(sample_record(box(0.08, 0.08, 0.08), builtin_finger("33"), seed=3))
 >>> model.polyhedron is not None, len(model.faces), model.convex
 (True, 6, True)
@@ -45,15 +45,15 @@ from typing import Any, TypeVar, cast
 import numpy as np
 
 from tactile_kb.errors import GeometryError, OpenModelError, UsageError
-from tactile_kb.planes import DEFAULT_SPLIT_TOL, Face, contact_arrays, merge_plane_arrays
-from tactile_kb.polyhedron import (
+from tactile_kb.geometry.planes import DEFAULT_SPLIT_TOL, Face, contact_arrays, merge_plane_arrays
+from tactile_kb.geometry.polyhedron import (
     DEFAULT_MERGE_FRACTION,
     Polyhedron,
     collapse_short_edges,
     polyhedron_from_planes,
 )
+from tactile_kb.geometry.sections import LayerSection, distinct_planes, layer_sections
 from tactile_kb.record import ExplorationRecord
-from tactile_kb.sections import LayerSection, distinct_planes, layer_sections
 
 __all__ = [
     "ASSUMED_TOP_DEG",
@@ -91,7 +91,7 @@ class ObjectModel:
     record
         The exploration record the model was built from.
     faces
-        One :class:`~tactile_kb.planes.Face` per face touched, then the table.
+        One :class:`~tactile_kb.geometry.planes.Face` per face touched, then the table.
     polyhedron
         The enveloping polyhedron of the supporting faces, or None when they do not bound a
         region (then ``open_reason`` says why and ``open_directions`` where to explore).
@@ -182,11 +182,11 @@ def build_model(
     Parameters
     ----------
     record
-        Contacts from an explorer or :func:`tactile_kb.synthetic.sample_record`.
+        Contacts from an explorer or :func:`tactile_kb.touch.synthetic.sample_record`.
     cut_deg, split_tol
-        Passed to :func:`tactile_kb.planes.merge_planes`.
+        Passed to :func:`tactile_kb.geometry.planes.merge_planes`.
     merge_fraction
-        Passed to :func:`tactile_kb.polyhedron.polyhedron_from_planes`. When
+        Passed to :func:`tactile_kb.geometry.polyhedron.polyhedron_from_planes`. When
         ``record.params["noise"]`` is positive and this is the default, vertices merge within
         :data:`NOISY_MERGE_FRACTION` × the touched points' smallest extent if that is larger
         (``options["merge_tol"]``).
@@ -206,7 +206,7 @@ def build_model(
     collapse_sigmas
         When ``record.params["noise"]`` is positive, polyhedron edges shorter than this many
         σ of their length (from the faces' uncertainties) are collapsed into a vertex
-        (:func:`tactile_kb.polyhedron.collapse_short_edges`); None never collapses.
+        (:func:`tactile_kb.geometry.polyhedron.collapse_short_edges`); None never collapses.
 
     Returns
     -------

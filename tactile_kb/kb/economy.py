@@ -4,7 +4,7 @@ With a uniform prior over the classes' minterms (every member of r(L) that a cla
 equally likely; the first class in file order takes a shared one; gaps weigh nothing), four
 figures:
 
-* ``lazy``: the expected number of propositions :meth:`~tactile_kb.engine.Engine.decide`
+* ``lazy``: the expected number of propositions :meth:`~tactile_kb.kb.engine.Engine.decide`
   asks when it goes in phase order, skips what the connections force and stops as soon as one
   answer is left. Exact, for any n, by BDD quantification (see :func:`lazy_expectation`);
 * ``optimal``: the expected number asked by the best decision tree (any proposition may come
@@ -25,7 +25,7 @@ So ``entropy ≤ optimal ≤ lazy ≤ test_all``; s(L) is never enumerated beyon
 
 Examples
 --------
->>> from tactile_kb.compiler import PAPER_EXAMPLE, compile_rules
+>>> from tactile_kb.kb.compiler import PAPER_EXAMPLE, compile_rules
 >>> e = compile_rules(PAPER_EXAMPLE).economy()
 >>> e.lazy, e.optimal, e.entropy, e.test_all
 (5.0, 4.0, 0.0, 7)
@@ -43,11 +43,11 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from tactile_kb.engine import ternary_closure
-from tactile_kb.expr import evaluate_columns, names
+from tactile_kb.kb.engine import ternary_closure
+from tactile_kb.kb.expr import evaluate_columns, names
 
 if TYPE_CHECKING:
-    from tactile_kb.compiler import Group, KnowledgeBase, Node
+    from tactile_kb.kb.compiler import Group, KnowledgeBase, Node
 
 __all__ = [
     "MAX_CLASSES",

@@ -14,7 +14,7 @@ and the contact point ``r1 = c + ρ·r0``, after Gaussian noise of standard devi
 
 Examples
 --------
->>> from tactile_kb.finger import builtin_finger
+>>> from tactile_kb.touch.finger import builtin_finger
 >>> from tactile_kb.solids import box
 >>> rec = sample_record(box(0.1, 0.06, 0.04), builtin_finger("33"), per_face=4, seed=1)
 >>> len(rec.contacts), rec.finger, rec.explorer
@@ -32,8 +32,8 @@ import trimesh
 from numpy.typing import NDArray
 
 from tactile_kb.errors import UsageError
-from tactile_kb.finger import Finger
 from tactile_kb.record import Contact, ExplorationRecord, Layer
+from tactile_kb.touch.finger import Finger
 
 __all__ = ["mesh_faces", "mesh_planes", "sample_layers", "sample_record"]
 

@@ -85,7 +85,7 @@ def generate_rules(
             texts.append(text)
     lines = [
         f"name: generated-{n}-{connections}-{classes}-seed{seed}",
-        "description: a random rule file (tactile_kb.rulegen)",
+        "description: a random rule file (tactile_kb.kb.rulegen)",
         "propositions:",
     ]
     lines += [f"  - {{id: {x}, text: proposition {x}}}" for x in ids]

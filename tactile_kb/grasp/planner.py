@@ -81,8 +81,8 @@ from scipy.optimize import linprog
 from scipy.spatial import ConvexHull, QhullError
 
 from tactile_kb.errors import UsageError
-from tactile_kb.model import ObjectModel, build_model
-from tactile_kb.polyhedron import Polyhedron
+from tactile_kb.geometry.model import ObjectModel, build_model
+from tactile_kb.geometry.polyhedron import Polyhedron
 from tactile_kb.record import ExplorationRecord
 
 __all__ = [
@@ -386,7 +386,7 @@ class SectionBlock:
     z0, z1
         The block's bottom and top, metres.
     layers
-        Indices of the exploration layers (:attr:`~tactile_kb.model.ObjectModel.layers`) it
+        Indices of the exploration layers (:attr:`~tactile_kb.geometry.model.ObjectModel.layers`) it
         comes from.
     """
 
@@ -488,10 +488,10 @@ def section_solid(model: ObjectModel) -> SectionSolid | None:
 
     Examples
     --------
-    >>> from tactile_kb.finger import builtin_finger
-    >>> from tactile_kb.model import build_model
+    >>> from tactile_kb.touch.finger import builtin_finger
+    >>> from tactile_kb.geometry.model import build_model
     >>> from tactile_kb.solids import l_shape
-    >>> from tactile_kb.synthetic import sample_layers
+    >>> from tactile_kb.touch.synthetic import sample_layers
     >>> record = sample_layers(l_shape(0.12, 0.08, 0.04, 0.04), builtin_finger("4"), [0.01, 0.03])
     >>> solid = section_solid(build_model(record))
     >>> len(solid.blocks), solid.height, solid.top_touched
@@ -724,8 +724,8 @@ def plan_grasp(
     Parameters
     ----------
     model_or_record
-        An :class:`~tactile_kb.model.ObjectModel`, or an exploration record (the model is
-        built with :func:`~tactile_kb.model.build_model`).
+        An :class:`~tactile_kb.geometry.model.ObjectModel`, or an exploration record (the model is
+        built with :func:`~tactile_kb.geometry.model.build_model`).
     mu
         Coefficient of friction of the pads.
     max_opening, min_opening

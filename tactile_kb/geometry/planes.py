@@ -22,9 +22,9 @@ build dozens of sliver faces. :func:`merge_planes` turns the contacts of a recor
 
 Examples
 --------
->>> from tactile_kb.finger import builtin_finger
+>>> from tactile_kb.touch.finger import builtin_finger
 >>> from tactile_kb.solids import box
->>> from tactile_kb.synthetic import sample_record
+>>> from tactile_kb.touch.synthetic import sample_record
 >>> rec = sample_record(box(0.1, 0.06, 0.04), builtin_finger("33"), per_face=8, seed=2)
 >>> faces = merge_planes(rec)
 >>> len(faces), sum(f.refined for f in faces)
@@ -317,7 +317,7 @@ def contact_arrays(contacts: Sequence[Contact]) -> tuple[FloatArray, FloatArray,
     """The contacts' tip centres, sensor directions r0 and points r1 as three (m, 3) arrays.
 
     Reading the attributes of hundreds of (pydantic) contacts is the slowest single step of
-    modelling a record, so :func:`tactile_kb.model.build_model` does it once and hands the
+    modelling a record, so :func:`tactile_kb.geometry.model.build_model` does it once and hands the
     arrays to :func:`merge_plane_arrays`.
     """
     return _column(contacts, "centre"), _column(contacts, "direction"), _column(contacts, "point")

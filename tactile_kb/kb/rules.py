@@ -43,7 +43,7 @@ from pydantic import BaseModel, BeforeValidator, ConfigDict, Field
 from pydantic_core import PydanticCustomError
 
 from tactile_kb.errors import ExpressionError, Problem, RuleFileError, UsageError
-from tactile_kb.expr import RESERVED, Expr, is_identifier, parse_expr, variables
+from tactile_kb.kb.expr import RESERVED, Expr, is_identifier, parse_expr, variables
 from tactile_kb.yaml_source import Source, format_path, load_yaml, validate
 
 __all__ = [
@@ -396,7 +396,7 @@ def rules_directories() -> list[Traversable]:
             dirs.append(installed)
     except (ModuleNotFoundError, OSError):  # pragma: no cover - tactile_kb is importable here
         pass
-    checkout = Path(__file__).resolve().parents[1] / "rules"
+    checkout = Path(__file__).resolve().parents[2] / "rules"
     if checkout.is_dir() and not any(str(d) == str(checkout) for d in dirs):
         dirs.append(checkout)
     return dirs

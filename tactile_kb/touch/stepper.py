@@ -1,6 +1,6 @@
 """The built-in analytic explorer: a spherical tip moving straight among the triangles of a mesh.
 
-:class:`StepperWorld` implements :class:`tactile_kb.world.World` exactly, without time steps.
+:class:`StepperWorld` implements :class:`tactile_kb.touch.world.World` exactly, without time steps.
 The set of tip-centre positions at which the tip of radius ρ touches (or penetrates) a
 triangle mesh is the union of simple convex primitives: for each triangle the slab
 ``|(p − v0)·n| ≤ ρ`` over the triangle, for each edge a cylinder of radius ρ between its ends,
@@ -10,7 +10,7 @@ quadratic for a cylinder or a ball). Where those intervals start and end are the
 where the fired set can change, so the world evaluates the sensors between consecutive ends
 and reports the first change:
 
-* contact intervals use the radius ρ + :data:`~tactile_kb.world.CONTACT_TOL` (a sensor fires
+* contact intervals use the radius ρ + :data:`~tactile_kb.touch.world.CONTACT_TOL` (a sensor fires
   at a contact within that tolerance);
 * blocking intervals use ρ − 1e-9 m: the tip stops where it would penetrate.
 
@@ -28,7 +28,7 @@ somewhere along it) and ``seed``; the same seed and the same calls give the same
 Examples
 --------
 >>> import trimesh
->>> from tactile_kb.finger import builtin_finger
+>>> from tactile_kb.touch.finger import builtin_finger
 >>> cube = trimesh.creation.box((0.1, 0.1, 0.1))
 >>> _ = cube.apply_translation((0.0, 0.0, 0.05))
 >>> world = StepperWorld(cube, builtin_finger("4"))
@@ -49,9 +49,9 @@ from numpy.typing import NDArray
 from scipy.spatial import cKDTree
 
 from tactile_kb.errors import UsageError
-from tactile_kb.explorers import WorldExplorer
-from tactile_kb.finger import Finger
-from tactile_kb.world import CONTACT_TOL, Box, Event, Motion, MotionKind, Vec3, Workspace
+from tactile_kb.touch.explorers import WorldExplorer
+from tactile_kb.touch.finger import Finger
+from tactile_kb.touch.world import CONTACT_TOL, Box, Event, Motion, MotionKind, Vec3, Workspace
 
 __all__ = [
     "BLOCK_TOL",
@@ -120,7 +120,7 @@ def _v3(a: Sequence[float] | FArray) -> Vec3:
 
 
 class StepperWorld:
-    """A :class:`~tactile_kb.world.World` in which the object is a triangle mesh and the tip a sphere.
+    """A :class:`~tactile_kb.touch.world.World` in which the object is a triangle mesh and the tip a sphere.
 
     Parameters
     ----------
@@ -358,7 +358,7 @@ class StepperWorld:
 
     # motions ------------------------------------------------------------------------------------
     def move(self, start: Vec3, direction: Vec3, length: float) -> Motion:
-        """A rigid straight motion (see :meth:`tactile_kb.world.World.move`)."""
+        """A rigid straight motion (see :meth:`tactile_kb.touch.world.World.move`)."""
         return self._run("move", start, direction, length)
 
     def slide(self, start: Vec3, direction: Vec3, length: float, sensor: int) -> Motion:
@@ -510,7 +510,7 @@ class StepperExplorer(WorldExplorer):
     Parameters
     ----------
     params
-        Servo parameters (:class:`tactile_kb.servo.ServoParams`); defaults suit 2–30 cm objects.
+        Servo parameters (:class:`tactile_kb.touch.servo.ServoParams`); defaults suit 2–30 cm objects.
     dropout, false_fire
         Sensor fault probabilities passed to the world (see :class:`StepperWorld`).
     """

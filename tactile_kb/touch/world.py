@@ -1,9 +1,9 @@
 """The world a finger explores: the protocol every explorer's physics implements.
 
-The servo logic (:mod:`tactile_kb.servo`) never knows which world it drives. A world answers
+The servo logic (:mod:`tactile_kb.touch.servo`) never knows which world it drives. A world answers
 two questions only: *what do the sensors read here?* (:meth:`World.sense`) and *where along
 this straight move does that change?* (:meth:`World.move`, :meth:`World.slide`). The built-in
-analytic world is :class:`tactile_kb.stepper.StepperWorld`; the MuJoCo plugin implements the
+analytic world is :class:`tactile_kb.touch.stepper.StepperWorld`; the MuJoCo plugin implements the
 same protocol on top of a physics engine.
 
 Conventions (every world follows them; the contract suite in :mod:`tactile_kb.testing` and
@@ -12,7 +12,7 @@ the controller rely on them):
 * Units are metres; the table is the plane z = 0 and the object rests on it (z ≥ 0).
 * A *position* is the centre of the finger's spherical tip of radius ``finger.radius``.
 * Sensor ``i`` fires when the direction from the tip centre to a contact point lies inside
-  its acceptance cone (:meth:`tactile_kb.finger.Finger.fired`); a contact is a point of the
+  its acceptance cone (:meth:`tactile_kb.touch.finger.Finger.fired`); a contact is a point of the
   object at distance ρ (within :data:`CONTACT_TOL`) from the tip centre.
 * Worlds are stateless with respect to the finger's position: every motion names its
   ``start``. The controller always passes either the ``end`` of the previous motion or a
@@ -58,7 +58,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Literal, Protocol, runtime_checkable
 
-from tactile_kb.finger import Finger
+from tactile_kb.touch.finger import Finger
 
 __all__ = [
     "CONTACT_TOL",

@@ -1,12 +1,12 @@
 """The servo logic of the exploring finger (the paper's "Tactile Exploration", Fig. 1 and Fig. 2).
 
 :class:`Controller` decides every motion from the sensors alone and drives any
-:class:`~tactile_kb.world.World`; it never knows which world it is in. The rules:
+:class:`~tactile_kb.touch.world.World`; it never knows which world it is in. The rules:
 
 * **Contour following.** While a sensor is ON the finger moves along the plane tangential at
   the contact, parallel to x–y, in the sense associated with that sensor (the object on the
   left, i.e. counter-clockwise seen from above: the direction ẑ × n for the outward normal
-  n = −r0). The motion is a compliant :meth:`~tactile_kb.world.World.slide`.
+  n = −r0). The motion is a compliant :meth:`~tactile_kb.touch.world.World.slide`.
 * **Block E, gate 1 (block N).** A sensor passing OFF→ON inhibits the commands of every other
   ON sensor: the finger follows the *last sensor that closed*. A sensor of another surface
   opening meanwhile does not interrupt the slide.
@@ -62,7 +62,7 @@ from numpy.typing import NDArray
 
 from tactile_kb.errors import ExplorationError, UsageError
 from tactile_kb.record import Contact, ExplorationRecord, Layer
-from tactile_kb.world import Motion, Vec3, World
+from tactile_kb.touch.world import Motion, Vec3, World
 
 __all__ = ["Controller", "Mark", "ServoParams"]
 
@@ -181,7 +181,7 @@ def _unit(v: FArray) -> FArray:
 
 
 class Controller:
-    """The exploration controller for one object in one :class:`~tactile_kb.world.World`.
+    """The exploration controller for one object in one :class:`~tactile_kb.touch.world.World`.
 
     Parameters
     ----------
@@ -855,7 +855,7 @@ class Controller:
         contacts = [c for c in self.contacts[max(first, 0) :] if c.layer == index]
         contour: list[tuple[float, float]] = []
         try:
-            from tactile_kb.sections import contour_from_contacts
+            from tactile_kb.geometry.sections import contour_from_contacts
         except ImportError:  # pragma: no cover - the geometry module is part of the package
             contour_from_contacts = None  # type: ignore[assignment]
         if contour_from_contacts is not None:

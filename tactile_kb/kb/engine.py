@@ -17,7 +17,7 @@ When two classes overlap, the first in file order takes the shared minterms.
 
 Examples
 --------
->>> from tactile_kb.compiler import PAPER_EXAMPLE, compile_rules
+>>> from tactile_kb.kb.compiler import PAPER_EXAMPLE, compile_rules
 >>> kb = compile_rules(PAPER_EXAMPLE)
 >>> d = kb.classify("1011011")
 >>> d.label, d.answer, d.matched, d.phase
@@ -40,11 +40,11 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from tactile_kb.errors import UsageError
-from tactile_kb.expr import evaluate_columns, names
-from tactile_kb.notation import Cube, cube_text
+from tactile_kb.kb.expr import evaluate_columns, names
+from tactile_kb.kb.notation import Cube, cube_text
 
 if TYPE_CHECKING:
-    from tactile_kb.compiler import KnowledgeBase, Node
+    from tactile_kb.kb.compiler import KnowledgeBase, Node
 
 __all__ = [
     "FAST_MAX_N",
@@ -148,7 +148,7 @@ def ternary_closure(values: np.ndarray[Any, Any], n: int, op: Any) -> np.ndarray
 
 
 class Engine:
-    """Classification over a compiled :class:`~tactile_kb.compiler.KnowledgeBase`.
+    """Classification over a compiled :class:`~tactile_kb.kb.compiler.KnowledgeBase`.
 
     Built by ``kb.engine``; use ``kb.classify``, ``kb.classify_batch`` and ``kb.decide``.
     """
@@ -361,7 +361,7 @@ class Engine:
         ]
         if single or len(known) == self.n:
             return single
-        from tactile_kb.analysis import minimal_conflict
+        from tactile_kb.kb.analysis import minimal_conflict
 
         return minimal_conflict(bdd, bdd.cube(known), self.kb.connection_bdds)
 

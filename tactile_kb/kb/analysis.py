@@ -13,7 +13,7 @@ redundant connection      the others already imply it            warning
 
 Examples
 --------
->>> from tactile_kb.compiler import compile_rules
+>>> from tactile_kb.kb.compiler import compile_rules
 >>> text = PAPER_EXAMPLE_TEXT.replace("  - ~(D & E)", "  - ~(D & E)\\n  - F -> ~E")
 >>> kb = compile_rules(text)
 >>> for p in kb.problems:
@@ -30,10 +30,10 @@ from typing import Any
 from pysat.examples.optux import OptUx
 from pysat.formula import WCNF, IDPool
 
-from tactile_kb.compiler import PAPER_EXAMPLE, KnowledgeBase, Node, iter_minterms
 from tactile_kb.errors import Problem
-from tactile_kb.expr import Expr, fold
-from tactile_kb.rules import Connection, RuleSet
+from tactile_kb.kb.compiler import PAPER_EXAMPLE, KnowledgeBase, Node, iter_minterms
+from tactile_kb.kb.expr import Expr, fold
+from tactile_kb.kb.rules import Connection, RuleSet
 from tactile_kb.yaml_source import format_path
 
 __all__ = ["analyse", "conflicts", "minimal_conflict", "smallest_conflict"]
@@ -208,7 +208,7 @@ def _redundant(kb: KnowledgeBase) -> list[Problem]:
 def analyse(kb: KnowledgeBase) -> list[Problem]:
     """Dead classes (errors), overlapping classes, gaps and redundant connections (warnings).
 
-    Run after :func:`conflicts` found r(L) non-empty; :func:`~tactile_kb.compiler.compile_rules`
+    Run after :func:`conflicts` found r(L) non-empty; :func:`~tactile_kb.kb.compiler.compile_rules`
     runs both.
     """
     bdd, rules = kb.bdd, kb.rules

@@ -40,8 +40,8 @@ import sympy
 from sympy.logic import SOPform
 
 from tactile_kb.errors import Problem, RuleFileError, UsageError
-from tactile_kb.expr import Expr, fold
-from tactile_kb.notation import (
+from tactile_kb.kb.expr import Expr, fold
+from tactile_kb.kb.notation import (
     Cube,
     Factored,
     Sop,
@@ -53,11 +53,11 @@ from tactile_kb.notation import (
     sop_from_sympy,
     to_sympy,
 )
-from tactile_kb.rules import RuleSet, load_rules, parse_rules
+from tactile_kb.kb.rules import RuleSet, load_rules, parse_rules
 
 if TYPE_CHECKING:
-    from tactile_kb.economy import Economy
-    from tactile_kb.engine import Decision, Engine
+    from tactile_kb.kb.economy import Economy
+    from tactile_kb.kb.engine import Decision, Engine
 
 try:  # CUDD where the wheel carries it, the pure-Python implementation otherwise
     from dd import cudd as _dd
@@ -404,7 +404,7 @@ class KnowledgeBase:
     @cached_property
     def engine(self) -> Engine:
         """The classification engine (built on first use)."""
-        from tactile_kb.engine import Engine
+        from tactile_kb.kb.engine import Engine
 
         return Engine(self)
 
@@ -423,7 +423,7 @@ class KnowledgeBase:
 
     def economy(self) -> Economy:
         """Expected propositions evaluated (lazy phase order, optimal tree) and the bounds."""
-        from tactile_kb.economy import economy
+        from tactile_kb.kb.economy import economy
 
         return economy(self)
 
@@ -447,7 +447,7 @@ class KnowledgeBase:
 
 
 def _groups(rules: RuleSet, bdd: Any, conns: Sequence[Node]) -> tuple[Group, ...]:
-    from tactile_kb.expr import names
+    from tactile_kb.kb.expr import names
 
     ids = rules.ids
     parent = list(range(len(ids)))
@@ -561,7 +561,7 @@ def compile_rules(rules: RuleSet | str | Path, *, check: bool = True) -> Knowled
     """Compile a rule set (or a packaged name, a path, YAML text) into a :class:`KnowledgeBase`.
 
     A ``str`` containing a newline is YAML text; another ``str`` is a packaged rule-set name or
-    a file path (see :func:`tactile_kb.rules.load_rules`).
+    a file path (see :func:`tactile_kb.kb.rules.load_rules`).
 
     With ``check`` (the default) the static analysis runs: connections that leave r(L) empty
     (naming the smallest conflicting set) and dead classes raise :class:`RuleFileError` (with
@@ -584,20 +584,20 @@ def compile_rules(rules: RuleSet | str | Path, *, check: bool = True) -> Knowled
     kb = KnowledgeBase(rules, bdd, conns, groups, class_bdds)
     problems: list[Problem] = []
     if check:
-        from tactile_kb.analysis import conflicts
+        from tactile_kb.kb.analysis import conflicts
 
         problems = conflicts(kb)
         if problems:
             raise RuleFileError(problems, _excerpt(rules, problems))
     kb.classes = tuple(_compile_class(kb, k) for k in range(len(rules.classes)))
     if check:
-        from tactile_kb.analysis import analyse
+        from tactile_kb.kb.analysis import analyse
 
         problems = analyse(kb)
         if any(p.severity == "error" for p in problems):
             raise RuleFileError(problems, _excerpt(rules, problems))
         kb.problems = tuple(sorted(problems, key=lambda p: (p.line, p.column)))
-    from tactile_kb.engine import FAST_MAX_N
+    from tactile_kb.kb.engine import FAST_MAX_N
 
     if kb.n <= FAST_MAX_N:
         _ = kb.engine  # small bases: precompute the answer sets, so classify() is fast at once

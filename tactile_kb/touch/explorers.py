@@ -2,7 +2,7 @@
 
 An *explorer* turns an object (a mesh or a mesh file) and a finger into an
 :class:`~tactile_kb.record.ExplorationRecord`. Explorers register under the entry-point group
-``tactile_kb.explorers``; the built-in ``stepper`` (:class:`tactile_kb.stepper.StepperExplorer`)
+``tactile_kb.explorers``; the built-in ``stepper`` (:class:`tactile_kb.touch.stepper.StepperExplorer`)
 joins the same way. An entry point may name an explorer class (instantiated with no
 arguments), an instance, or a provider mapping ``{name: explorer}``.
 
@@ -17,9 +17,9 @@ is advanced to a goal (``"contact"``: the first touch; ``"layer"``: the first cl
 ``"complete"``: the end) and resumed later, so a classifier can evaluate phase I after the
 first contact and explore further only if it needs to.
 
-A physics-based explorer only has to build a :class:`~tactile_kb.world.World`: subclass
+A physics-based explorer only has to build a :class:`~tactile_kb.touch.world.World`: subclass
 :class:`WorldExplorer` and implement :meth:`WorldExplorer.make_world`; the shared servo
-controller (:mod:`tactile_kb.servo`) does the rest and fills the same record type.
+controller (:mod:`tactile_kb.touch.servo`) does the rest and fills the same record type.
 
 Examples
 --------
@@ -39,16 +39,16 @@ import abc
 from typing import TYPE_CHECKING, Any, Literal, Protocol, runtime_checkable
 
 from tactile_kb.errors import PluginError, UsageError
-from tactile_kb.finger import Finger, load_finger
 from tactile_kb.objects import ObjectLike, check_thickness, load_object, object_name
 from tactile_kb.plugins import Registry
 from tactile_kb.record import ExplorationRecord
+from tactile_kb.touch.finger import Finger, load_finger
 
 if TYPE_CHECKING:
     import trimesh
 
-    from tactile_kb.servo import Controller, ServoParams
-    from tactile_kb.world import World
+    from tactile_kb.touch.servo import Controller, ServoParams
+    from tactile_kb.touch.world import World
 
 __all__ = [
     "GOALS",
@@ -92,7 +92,7 @@ class ExplorationSession(Protocol):
 class Explorer(Protocol):
     """What every explorer provides.
 
-    ``finger`` is a :class:`~tactile_kb.finger.Finger`, a built-in layout name (``"4"``,
+    ``finger`` is a :class:`~tactile_kb.touch.finger.Finger`, a built-in layout name (``"4"``,
     ``"33"``) or a layout YAML file; ``seed`` makes the run reproducible; ``noise`` is the σ
     (metres) of the contact-position noise.
     """
@@ -123,7 +123,7 @@ class Explorer(Protocol):
 
 
 class ServoSession:
-    """An :class:`ExplorationSession` over the shared controller (:class:`tactile_kb.servo.Controller`)."""
+    """An :class:`ExplorationSession` over the shared controller (:class:`tactile_kb.touch.servo.Controller`)."""
 
     def __init__(self, controller: Controller) -> None:
         self.controller = controller
@@ -158,10 +158,10 @@ class ServoSession:
 
 
 class WorldExplorer(abc.ABC):
-    """Base of explorers that drive the shared servo controller in a :class:`~tactile_kb.world.World`.
+    """Base of explorers that drive the shared servo controller in a :class:`~tactile_kb.touch.world.World`.
 
     Subclasses set :attr:`name` and implement :meth:`make_world`. ``params`` are the servo
-    parameters (:class:`tactile_kb.servo.ServoParams`, default when ``None``); like a
+    parameters (:class:`tactile_kb.touch.servo.ServoParams`, default when ``None``); like a
     scikit-learn estimator, ``__init__`` only stores them.
     """
 
@@ -185,7 +185,7 @@ class WorldExplorer(abc.ABC):
         noise: float = 0.0,
     ) -> ServoSession:
         """Start a lazy exploration of ``obj`` (nothing is explored before :meth:`ServoSession.advance`)."""
-        from tactile_kb.servo import Controller, ServoParams
+        from tactile_kb.touch.servo import Controller, ServoParams
 
         if noise < 0:
             raise UsageError(f"noise must be ≥ 0 metres, got {noise}")
@@ -237,7 +237,7 @@ def _ensure_builtin() -> None:
     # installed has none, so register the same reference lazily as a fallback for *discovery*.
     if "stepper" not in explorer_registry.names():
         explorer_registry.register(
-            "stepper", "tactile_kb.stepper:StepperExplorer", source="built-in"
+            "stepper", "tactile_kb.touch.stepper:StepperExplorer", source="built-in"
         )
 
 
