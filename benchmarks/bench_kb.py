@@ -18,11 +18,12 @@ import numpy as np
 import tactile_kb.kb.analysis
 import tactile_kb.kb.economy
 import tactile_kb.kb.engine  # noqa: F401 - imported up front: the figures exclude module imports
+from tactile_kb import compile_rules
 from tactile_kb.cli.kb import compile_text
-from tactile_kb.kb.compiler import BACKEND, PAPER_EXAMPLE, compile_rules
+from tactile_kb.kb.bdd import BACKEND
 from tactile_kb.kb.economy import lazy_expectation
 from tactile_kb.kb.rulegen import generate_rules
-from tactile_kb.kb.rules import RuleSet, parse_rules
+from tactile_kb.kb.rules import PAPER_EXAMPLE, RuleSet, parse_rules
 
 
 def _best(fn: Callable[[], object], repeat: int) -> float:

@@ -46,8 +46,9 @@ _EXPORTS: dict[str, str] = {
     "load_rules": "tactile_kb.kb.rules",
     "parse_rules": "tactile_kb.kb.rules",
     "parse_expr": "tactile_kb.kb.expr",
-    "CompiledClass": "tactile_kb.kb.compiler",
-    "KnowledgeBase": "tactile_kb.kb.compiler",
+    "CompiledClass": "tactile_kb.kb.knowledge",
+    "Knowledge": "tactile_kb.kb.knowledge",
+    "KnowledgeBase": "tactile_kb.kb.base",
     "compile_rules": "tactile_kb.kb.compiler",
     "Economy": "tactile_kb.kb.economy",
     "Decision": "tactile_kb.kb.engine",
@@ -102,6 +103,7 @@ __all__ = [
     "GeometryError",
     "GraspCandidate",
     "GraspPlan",
+    "Knowledge",
     "KnowledgeBase",
     "Layer",
     "LayoutFileError",
@@ -165,11 +167,18 @@ if TYPE_CHECKING:
     from tactile_kb.geometry.planes import Face, merge_planes
     from tactile_kb.geometry.polyhedron import Polyhedron, polyhedron_from_planes
     from tactile_kb.grasp.planner import GraspCandidate, GraspPlan, plan_grasp
-    from tactile_kb.kb.compiler import CompiledClass, KnowledgeBase, compile_rules
+    from tactile_kb.kb.base import KnowledgeBase
+    from tactile_kb.kb.compiler import compile_rules
     from tactile_kb.kb.economy import Economy
     from tactile_kb.kb.engine import Decision
     from tactile_kb.kb.expr import parse_expr
-    from tactile_kb.kb.rules import RuleSet, available_rule_sets, load_rules, parse_rules
+    from tactile_kb.kb.knowledge import CompiledClass, Knowledge
+    from tactile_kb.kb.rules import (
+        RuleSet,
+        available_rule_sets,
+        load_rules,
+        parse_rules,
+    )
     from tactile_kb.objects import load_object
     from tactile_kb.pipeline import Classification, classify, classify_record
     from tactile_kb.record import Contact, ExplorationRecord, Layer, Plane

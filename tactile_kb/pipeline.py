@@ -30,7 +30,8 @@ from typing import Any
 from tactile_kb.errors import Problem, RuleFileError, UsageError
 from tactile_kb.features.builtin import check_binding, get_feature, measure, measure_names
 from tactile_kb.geometry.model import ObjectModel, build_model
-from tactile_kb.kb.compiler import KnowledgeBase, compile_rules
+from tactile_kb.kb.base import KnowledgeBase
+from tactile_kb.kb.compiler import compile_rules
 from tactile_kb.kb.engine import Decision
 from tactile_kb.kb.rules import RuleSet, load_rules
 from tactile_kb.objects import ObjectLike, object_name

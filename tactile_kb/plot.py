@@ -51,7 +51,7 @@ from tactile_kb.record import ExplorationRecord
 if TYPE_CHECKING:
     import trimesh
 
-    from tactile_kb.kb.compiler import KnowledgeBase
+    from tactile_kb.kb.base import KnowledgeBase
     from tactile_kb.kb.engine import Decision
     from tactile_kb.kb.rules import RuleSet
 
@@ -527,7 +527,8 @@ def plot_tree(
     size, dpi
         Figure size (inches) and resolution.
     """
-    from tactile_kb.kb.compiler import KnowledgeBase, compile_rules
+    from tactile_kb.kb.base import KnowledgeBase
+    from tactile_kb.kb.compiler import compile_rules
 
     kb = rules if isinstance(rules, KnowledgeBase) else compile_rules(rules)
     if decision is None and assignment is not None:

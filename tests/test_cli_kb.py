@@ -8,8 +8,8 @@ from pathlib import Path
 import pytest
 
 from tactile_kb.cli import main
-from tactile_kb.kb.compiler import PAPER_EXAMPLE
 from tactile_kb.kb.rulegen import rules_text
+from tactile_kb.kb.rules import PAPER_EXAMPLE
 
 BAR = "\u0304"
 

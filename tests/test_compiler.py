@@ -12,18 +12,13 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from kbtruth import bits, r_table, rows, table
 
+from tactile_kb import compile_rules
 from tactile_kb.errors import RuleFileError, UsageError
-from tactile_kb.kb.compiler import (
-    EXACT_LIMIT,
-    PAPER_EXAMPLE,
-    compile_rules,
-    exact_count,
-    isop,
-    manager,
-)
+from tactile_kb.kb.bdd import exact_count, isop, manager
 from tactile_kb.kb.expr import parse_expr
+from tactile_kb.kb.knowledge import EXACT_LIMIT
 from tactile_kb.kb.rulegen import generate_rules, rules_text
-from tactile_kb.kb.rules import parse_rules
+from tactile_kb.kb.rules import PAPER_EXAMPLE, parse_rules
 
 BAR = "\u0304"  # the combining macron, spelled out so that no editor can precompose it
 
@@ -196,7 +191,7 @@ def test_to_dict_is_json_ready() -> None:
 
 
 @pytest.mark.parametrize(
-    "module", ["compiler", "notation", "engine", "analysis", "economy", "rulegen"]
+    "module", ["compiler", "bdd", "notation", "engine", "analysis", "economy", "rulegen"]
 )
 def test_module_examples(module: str) -> None:
     mod = importlib.import_module(f"tactile_kb.kb.{module}")

@@ -12,10 +12,11 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from kbtruth import labels, rows
 
+from tactile_kb import KnowledgeBase, compile_rules
 from tactile_kb.kb import economy as economy_module
-from tactile_kb.kb.compiler import PAPER_EXAMPLE, KnowledgeBase, compile_rules
 from tactile_kb.kb.economy import huffman_bound, lazy_expectation
 from tactile_kb.kb.rulegen import generate_rules, rules_text
+from tactile_kb.kb.rules import PAPER_EXAMPLE
 
 
 def _brute(kb: KnowledgeBase, order: list[str] | None = None) -> tuple[float, float, float]:

@@ -12,11 +12,12 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from kbtruth import bits, labels, rows, table
 
+from tactile_kb import KnowledgeBase, compile_rules
 from tactile_kb.errors import UsageError
 from tactile_kb.kb import engine as engine_module
-from tactile_kb.kb.compiler import PAPER_EXAMPLE, KnowledgeBase, compile_rules
 from tactile_kb.kb.engine import INCONSISTENT, TABLE_MAX_N, UNDECIDED, ternary_closure
 from tactile_kb.kb.rulegen import generate_rules, rules_text
+from tactile_kb.kb.rules import PAPER_EXAMPLE
 
 BAR = "\u0304"
 

@@ -18,7 +18,8 @@ from pathlib import Path
 from typing import Any
 
 from tactile_kb.errors import Problem, RuleFileError, UsageError
-from tactile_kb.kb.compiler import KnowledgeBase, compile_rules
+from tactile_kb.kb.base import KnowledgeBase
+from tactile_kb.kb.compiler import compile_rules
 from tactile_kb.kb.engine import Decision
 from tactile_kb.kb.rules import RuleSet, load_rules
 

@@ -14,7 +14,8 @@ redundant connection      the others already imply it            warning
 Examples
 --------
 >>> from tactile_kb.kb.compiler import compile_rules
->>> text = PAPER_EXAMPLE_TEXT.replace("  - ~(D & E)", "  - ~(D & E)\\n  - F -> ~E")
+>>> from tactile_kb.kb.rules import PAPER_EXAMPLE
+>>> text = PAPER_EXAMPLE.replace("  - ~(D & E)", "  - ~(D & E)\\n  - F -> ~E")
 >>> kb = compile_rules(text)
 >>> for p in kb.problems:
 ...     print(p)
@@ -31,14 +32,13 @@ from pysat.examples.optux import OptUx
 from pysat.formula import WCNF, IDPool
 
 from tactile_kb.errors import Problem
-from tactile_kb.kb.compiler import PAPER_EXAMPLE, KnowledgeBase, Node, iter_minterms
+from tactile_kb.kb.bdd import Node, iter_minterms
 from tactile_kb.kb.expr import Expr, fold
+from tactile_kb.kb.knowledge import Knowledge
 from tactile_kb.kb.rules import Connection, RuleSet
 from tactile_kb.yaml_source import format_path
 
 __all__ = ["analyse", "conflicts", "minimal_conflict", "smallest_conflict"]
-
-PAPER_EXAMPLE_TEXT = PAPER_EXAMPLE
 
 
 def _at_connection(rules: RuleSet, c: Connection, message: str, severity: str = "error") -> Problem:
@@ -139,7 +139,7 @@ def minimal_conflict(bdd: Any, base: Node, parts: Sequence[Node]) -> list[int]:
     return keep
 
 
-def conflicts(kb: KnowledgeBase) -> list[Problem]:
+def conflicts(kb: Knowledge) -> list[Problem]:
     """Errors for connections that leave r(L) empty, naming a smallest conflicting set."""
     rules, bdd = kb.rules, kb.bdd
     problems = []
@@ -160,13 +160,13 @@ def conflicts(kb: KnowledgeBase) -> list[Problem]:
 # --------------------------------------------------------------------------- the other checks
 
 
-def _class_problem(kb: KnowledgeBase, k: int, message: str, severity: str) -> Problem:
+def _class_problem(kb: Knowledge, k: int, message: str, severity: str) -> Problem:
     rc = kb.rules.classes[k]
     path = rc.path or ("classes", k, "when")
     return kb.rules.source.problem(path, message, severity=severity, offset=0)
 
 
-def _dead(kb: KnowledgeBase, k: int) -> Problem:
+def _dead(kb: Knowledge, k: int) -> Problem:
     bdd, rules = kb.bdd, kb.rules
     rc = rules.classes[k]
     c = kb.class_bdds[k]
@@ -180,7 +180,7 @@ def _dead(kb: KnowledgeBase, k: int) -> Problem:
     )
 
 
-def _redundant(kb: KnowledgeBase) -> list[Problem]:
+def _redundant(kb: Knowledge) -> list[Problem]:
     bdd, rules = kb.bdd, kb.rules
     problems = []
     for g in kb.groups:
@@ -205,7 +205,7 @@ def _redundant(kb: KnowledgeBase) -> list[Problem]:
     return problems
 
 
-def analyse(kb: KnowledgeBase) -> list[Problem]:
+def analyse(kb: Knowledge) -> list[Problem]:
     """Dead classes (errors), overlapping classes, gaps and redundant connections (warnings).
 
     Run after :func:`conflicts` found r(L) non-empty; :func:`~tactile_kb.kb.compiler.compile_rules`

@@ -47,7 +47,8 @@ from tactile_kb.kb.engine import ternary_closure
 from tactile_kb.kb.expr import evaluate_columns, names
 
 if TYPE_CHECKING:
-    from tactile_kb.kb.compiler import Group, KnowledgeBase, Node
+    from tactile_kb.kb.bdd import Node
+    from tactile_kb.kb.knowledge import Group, Knowledge
 
 __all__ = [
     "MAX_CLASSES",
@@ -169,7 +170,7 @@ def _entropy(weights: Sequence[float]) -> float:
 # --------------------------------------------------------------------------- the phase order
 
 
-def lazy_expectation(kb: KnowledgeBase, order: Sequence[str] | None = None) -> float:
+def lazy_expectation(kb: Knowledge, order: Sequence[str] | None = None) -> float:
     """The exact expected number of propositions ``decide`` asks in ``order`` (default: the
     phase order), under the uniform prior over the classes' minterms.
 
@@ -186,7 +187,7 @@ def lazy_expectation(kb: KnowledgeBase, order: Sequence[str] | None = None) -> f
     counts after K·n single-variable quantifications: no enumeration of prefixes.
     """
     bdd = kb.bdd
-    order = tuple(order if order is not None else kb.engine.order)
+    order = tuple(order if order is not None else kb.order)
     weighted: Node = bdd.false
     for owned in kb.owned_bdds:
         weighted |= owned
@@ -210,7 +211,7 @@ def lazy_expectation(kb: KnowledgeBase, order: Sequence[str] | None = None) -> f
 # --------------------------------------------------------------------------- optimal tree
 
 
-def _touched(kb: KnowledgeBase) -> list[Group]:
+def _touched(kb: Knowledge) -> list[Group]:
     """The groups some class mentions; the others only scale every class's weight."""
     support: set[str] = set()
     for c in kb.class_bdds:
@@ -218,7 +219,7 @@ def _touched(kb: KnowledgeBase) -> list[Group]:
     return [g for g in kb.groups if support & set(g.ids)]
 
 
-def optimal_ternary(kb: KnowledgeBase) -> float:
+def optimal_ternary(kb: Knowledge) -> float:
     """The optimal tree's expected cost by dynamic programming over every partial assignment
     of the propositions the classes depend on (3ᵐ patterns, m of them).
 
@@ -283,7 +284,7 @@ class _Budget(Exception):
 
 
 def optimal_bdd(
-    kb: KnowledgeBase,
+    kb: Knowledge,
     upper: float,
     max_work: int | None = None,
     max_seconds: float | None = None,
@@ -399,17 +400,17 @@ def optimal_bdd(
     return min(value, upper)
 
 
-def _class_order(kb: KnowledgeBase) -> list[str]:
+def _class_order(kb: Knowledge) -> list[str]:
     """The phase order with the propositions most classes mention first (stable): another
     fixed order whose lazy cost bounds the optimum from above."""
     mentions: dict[str, int] = dict.fromkeys(kb.ids, 0)
     for rc in kb.rules.classes:
         for name in names(rc.expr):
             mentions[name] += 1
-    return sorted(kb.engine.order, key=lambda v: -mentions[v])
+    return sorted(kb.order, key=lambda v: -mentions[v])
 
 
-def economy(kb: KnowledgeBase) -> Economy:
+def economy(kb: Knowledge) -> Economy:
     """The economy figures of a compiled rule set (see the module docstring)."""
     K = len(kb.classes)
     weights = [float(kb.count(f)) for f in kb.owned_bdds]

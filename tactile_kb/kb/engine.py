@@ -40,11 +40,13 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from tactile_kb.errors import UsageError
+from tactile_kb.kb.analysis import minimal_conflict
 from tactile_kb.kb.expr import evaluate_columns, names
 from tactile_kb.kb.notation import Cube, cube_text
 
 if TYPE_CHECKING:
-    from tactile_kb.kb.compiler import KnowledgeBase, Node
+    from tactile_kb.kb.bdd import Node
+    from tactile_kb.kb.knowledge import Knowledge
 
 __all__ = [
     "FAST_MAX_N",
@@ -153,10 +155,10 @@ class Engine:
     Built by ``kb.engine``; use ``kb.classify``, ``kb.classify_batch`` and ``kb.decide``.
     """
 
-    def __init__(self, kb: KnowledgeBase) -> None:
+    def __init__(self, kb: Knowledge) -> None:
         # a proxy: no reference cycle may hold BDD nodes, or CUDD's manager could be freed
         # before them by the garbage collector
-        self.kb: KnowledgeBase = weakref.proxy(kb)
+        self.kb: Knowledge = weakref.proxy(kb)
         rules = kb.rules
         self.ids = kb.ids
         self.n = kb.n
@@ -361,8 +363,6 @@ class Engine:
         ]
         if single or len(known) == self.n:
             return single
-        from tactile_kb.kb.analysis import minimal_conflict
-
         return minimal_conflict(bdd, bdd.cube(known), self.kb.connection_bdds)
 
     # ----------------------------------------------------------------- explanation

@@ -47,6 +47,7 @@ from tactile_kb.kb.expr import RESERVED, Expr, is_identifier, parse_expr, variab
 from tactile_kb.yaml_source import Source, format_path, load_yaml, validate
 
 __all__ = [
+    "PAPER_EXAMPLE",
     "Connection",
     "FeatureBinding",
     "Phase",
@@ -717,3 +718,35 @@ def _value_at(data: Any, path: PathT) -> Any:
         else:
             return None
     return node
+
+
+PAPER_EXAMPLE = """\
+name: paper-example
+description: The paper's base A–G, its phases I–V and its cube (eq. 3–5).
+propositions:
+  - {id: A, text: There is contact between the object and the finger}
+  - {id: B, text: Surface is curved}
+  - {id: C, text: Surface is plane}
+  - {id: D, text: Vertical edges are parallel}
+  - {id: E, text: '"Vertical" edges join at one point'}
+  - {id: F, text: Three pairs of parallel faces exist}
+  - {id: G, text: Distances between neighbouring vertices are equal}
+connections:
+  - B = ~C
+  - F -> D
+  - ~(D & E)
+phases:
+  - {id: I, propositions: [A]}
+  - {id: II, propositions: [B, C]}
+  - {id: III, propositions: [D, E]}
+  - {id: IV, propositions: [F]}
+  - {id: V, propositions: [G]}
+classes:
+  - id: cube
+    answer: OBJECT IS A CUBE
+    when: A & ~B & C & D & ~E & F & G
+otherwise:
+  id: unknown
+  answer: OBJECT IS NOT RECOGNISED
+"""
+"""The paper's base A–G as a rule file (the cube only); used by examples and tests."""
