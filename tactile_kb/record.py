@@ -27,10 +27,10 @@ import numpy as np
 from pydantic import BaseModel, ConfigDict, Field, ValidationError
 
 from tactile_kb.errors import RecordError
+from tactile_kb.types import Vec3
 
 __all__ = ["Contact", "ExplorationRecord", "Layer", "Plane", "Vec2", "Vec3"]
 
-Vec3 = tuple[float, float, float]
 Vec2 = tuple[float, float]
 
 RECORD_VERSION = 1

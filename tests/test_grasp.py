@@ -14,18 +14,16 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 import tactile_kb.grasp.planner as grasp_module
+import tactile_kb.grasp.quality as quality_module
 from tactile_kb.errors import UsageError
+from tactile_kb.geometry.blocks import section_solid
 from tactile_kb.geometry.model import build_model
 from tactile_kb.geometry.polyhedron import polyhedron_from_planes
-from tactile_kb.grasp.planner import (
-    DEFAULT_MARGIN,
-    QUALITY_MEASURE,
-    GraspCandidate,
+from tactile_kb.grasp.planner import DEFAULT_MARGIN, QUALITY_MEASURE, GraspCandidate, plan_grasp
+from tactile_kb.grasp.quality import (
     ferrari_canny,
     force_closure,
     least_force,
-    plan_grasp,
-    section_solid,
     torque_scale,
     wrench_primitives,
 )
@@ -571,6 +569,7 @@ def test_a_non_convex_model_without_layers_does_not_grasp_across_its_notch() -> 
 
 
 def test_module_examples() -> None:
-    result = doctest.testmod(grasp_module, optionflags=doctest.ELLIPSIS)
-    assert result.attempted >= 10
-    assert result.failed == 0
+    for module in (grasp_module, quality_module):
+        result = doctest.testmod(module, optionflags=doctest.ELLIPSIS)
+        assert result.attempted >= 3
+        assert result.failed == 0

@@ -13,9 +13,8 @@ from tactile_kb.errors import UsageError
 from tactile_kb.geometry.model import build_model
 from tactile_kb.grasp.planner import plan_grasp
 from tactile_kb.kb.compiler import compile_rules
+from tactile_kb.kb.tree import TreeNode, choice_tree
 from tactile_kb.plot import (
-    TreeNode,
-    choice_tree,
     plot_classification,
     plot_exploration,
     plot_tree,

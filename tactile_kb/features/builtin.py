@@ -77,6 +77,7 @@ from tactile_kb.geometry.model import ObjectModel
 from tactile_kb.geometry.polyhedron import Polyhedron
 from tactile_kb.geometry.sections import cross_section
 from tactile_kb.plugins import Registry
+from tactile_kb.types import FloatArray
 
 __all__ = [
     "BUILTIN_FEATURES",
@@ -99,7 +100,6 @@ __all__ = [
     "side_count",
 ]
 
-FloatArray = NDArray[np.float64]
 FeatureFn = Callable[..., bool]
 
 TOLERANCE_DEG = 5.0

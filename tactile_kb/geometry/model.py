@@ -79,7 +79,6 @@ planes meeting at an octahedron's vertex split it into two joined by an edge of 
 (2–4 σ), while the shortest real edges of the test families are more than 5 σ long."""
 
 T = TypeVar("T")
-FloatArray = np.ndarray[Any, np.dtype[np.float64]]
 
 
 @dataclass(frozen=True, eq=False)

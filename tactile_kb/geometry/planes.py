@@ -49,6 +49,7 @@ from scipy.cluster.hierarchy import fcluster, linkage
 
 from tactile_kb.errors import UsageError
 from tactile_kb.record import Contact, ExplorationRecord
+from tactile_kb.types import FloatArray, Vec3
 
 __all__ = [
     "DEFAULT_CUT_DEG",
@@ -64,8 +65,6 @@ __all__ = [
     "merge_planes",
 ]
 
-FloatArray = NDArray[np.float64]
-Vec3 = tuple[float, float, float]
 
 DEFAULT_CUT_DEG = 15.0
 """Cut of the normal clustering when the record names no sensor directions, degrees."""

@@ -38,6 +38,7 @@ from scipy.optimize import linprog
 from scipy.spatial import ConvexHull, HalfspaceIntersection, QhullError
 
 from tactile_kb.errors import GeometryError, OpenModelError, UsageError
+from tactile_kb.types import FloatArray
 
 __all__ = [
     "DEFAULT_MERGE_FRACTION",
@@ -48,7 +49,6 @@ __all__ = [
     "vertex_covariances",
 ]
 
-FloatArray = NDArray[np.float64]
 
 DEFAULT_MERGE_FRACTION = 0.03
 """Vertices closer than this fraction of the object's diameter are merged into one.

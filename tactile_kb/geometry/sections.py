@@ -25,11 +25,11 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
-from numpy.typing import NDArray
 
 from tactile_kb.errors import UsageError
 from tactile_kb.geometry.polyhedron import Polyhedron
 from tactile_kb.record import Contact, ExplorationRecord
+from tactile_kb.types import FloatArray
 
 __all__ = [
     "LayerSection",
@@ -41,7 +41,6 @@ __all__ = [
     "polygon_area",
 ]
 
-FloatArray = NDArray[np.float64]
 
 LINE_TOL = 0.004
 """Two touched lines within this distance (m) and ``PLANE_DEG`` are the same plane."""

@@ -40,33 +40,23 @@ meets no other part of the object on its way. When the centre of mass lies outsi
 material (an L) the line passing closest to it wins, and its offset is reported.
 :attr:`GraspPlan.notes` states the height assumption.
 
-The contact model (the pincers' pads are soft): each contact pushes with a force inside its
-friction cone (linearised by ``cone_edges`` unit forces on the cone's boundary, one of them
-pointing straight up so holding against gravity is exact) and may twist about its normal by
-torsional friction, modelled as two extra wrench primitives ``±ρ·n`` (a unit force acting at
-the pad radius ρ, 5 mm by default). The grasp wrench set is the convex hull of these
-primitives (total contact force ≤ 1 N); ε is the radius of the largest ball about the
-origin inside it (torques divided by the object's size ``λ = √(tr I / m)``), and the least
-force is its gauge at the gravity wrench. With hard point contacts (``soft=False``) two
-contacts cannot resist a torque about the line joining them, so ε = 0.
+The grasp metrics (the contact model, ε and the least force) are in
+:mod:`tactile_kb.grasp.quality`; the layered solid of box unions in
+:mod:`tactile_kb.geometry.blocks`.
 
 Examples
 --------
->>> import numpy as np
->>> points = np.array([[0.05, 0.0, 0.02], [-0.05, 0.0, 0.02]])
->>> normals = np.array([[1.0, 0.0, 0.0], [-1.0, 0.0, 0.0]])
->>> force_closure(points, normals, mu=0.5)
-True
->>> round(least_force(points, normals, com=(0.0, 0.0, 0.02), mass=0.2), 2)
-4.39
->>> ferrari_canny(points, normals, com=(0.0, 0.0, 0.02), torque_scale=0.05, soft=False)
-0.0
+>>> from tactile_kb.solids import box
+>>> from tactile_kb.touch.finger import builtin_finger
+>>> from tactile_kb.touch.synthetic import sample_record
+>>> plan = plan_grasp(sample_record(box(0.1, 0.06, 0.04), builtin_finger("33"), seed=1))
+>>> plan.ok, plan.best.force_closure
+(True, True)
 """
 
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -75,45 +65,36 @@ import shapely
 import shapely.geometry
 import shapely.ops
 import shapely.validation
-import trimesh
-from numpy.typing import ArrayLike, NDArray
-from scipy.optimize import linprog
-from scipy.spatial import ConvexHull, QhullError
 
 from tactile_kb.errors import UsageError
+from tactile_kb.geometry.blocks import SECTION_TOL, SectionSolid, section_solid
 from tactile_kb.geometry.model import ObjectModel, build_model
 from tactile_kb.geometry.polyhedron import Polyhedron
+from tactile_kb.grasp.quality import (
+    DEFAULT_CONE_EDGES,
+    DEFAULT_MU,
+    DEFAULT_PAD_RADIUS,
+    ferrari_canny,
+    force_closure,
+    least_force,
+    torque_scale,
+)
 from tactile_kb.record import ExplorationRecord
+from tactile_kb.types import FloatArray, vec3
 
 __all__ = [
-    "DEFAULT_CONE_EDGES",
     "DEFAULT_DENSITY",
     "DEFAULT_MARGIN",
     "DEFAULT_MAX_COM_OFFSET",
     "DEFAULT_MAX_OPENING",
-    "DEFAULT_MU",
-    "DEFAULT_PAD_RADIUS",
-    "GRAVITY",
     "QUALITY_MEASURE",
     "RANK_ANGLE_STEP_DEG",
     "GraspCandidate",
     "GraspPlan",
     "Rejection",
-    "SectionBlock",
-    "SectionSolid",
-    "ferrari_canny",
-    "force_closure",
-    "least_force",
     "plan_grasp",
-    "section_solid",
-    "torque_scale",
-    "wrench_primitives",
 ]
 
-FloatArray = NDArray[np.float64]
-
-DEFAULT_MU = 0.5
-"""Coefficient of friction between the pads and the object (friction angle 26.6°)."""
 
 DEFAULT_MAX_OPENING = 0.15
 """Widest jaw opening of the pincers, metres."""
@@ -124,17 +105,8 @@ DEFAULT_MARGIN = 0.005
 DEFAULT_MAX_COM_OFFSET = 0.02
 """The grasp line may pass at most this far (m) from the centre of mass."""
 
-DEFAULT_PAD_RADIUS = 0.005
-"""ρ of the soft pads, metres: torsional friction is modelled as a unit force at this radius."""
-
-DEFAULT_CONE_EDGES = 8
-"""Unit forces on the boundary of each friction cone (its linearisation)."""
-
 DEFAULT_DENSITY = 1000.0
 """kg/m³, for the object's mass when none is given (touch does not weigh)."""
-
-GRAVITY = 9.81
-"""m/s²."""
 
 RANK_ANGLE_STEP_DEG = 2.0
 """Candidates whose planes' angles fall in the same step of this many degrees rank as equally
@@ -145,407 +117,6 @@ QUALITY_MEASURE = "ferrari_canny_soft"
 
 TABLE_ANGLE_DEG = 5.0
 TABLE_HEIGHT_TOL = 0.002
-
-SAME_CONTOUR = 0.05
-"""Consecutive layers form one block when their contours differ by less than this fraction of
-the smaller one's area (symmetric difference)."""
-
-TOP_NORMAL_DEG = 20.0
-"""A contact whose normal is within this angle of "up" touched a top."""
-
-SECTION_TOL = 0.001
-"""Gaps and obstacles thinner than this (m) along the grasp line are slivers of noise."""
-
-_UP = np.array([0.0, 0.0, 1.0])
-
-
-# ---------------------------------------------------------------------------------------------
-# Contact mechanics
-# ---------------------------------------------------------------------------------------------
-
-
-def _contacts(points: ArrayLike, normals: ArrayLike) -> tuple[FloatArray, FloatArray]:
-    p = np.asarray(points, dtype=float)
-    n = np.asarray(normals, dtype=float)
-    if p.shape != n.shape or p.ndim != 2 or p.shape[1] != 3 or len(p) < 1:
-        raise UsageError(f"points and normals must both be (k, 3) arrays, got {p.shape}, {n.shape}")
-    lengths = np.linalg.norm(n, axis=1)
-    if np.any(lengths < 1e-12) or not np.all(np.isfinite(p)):
-        raise UsageError("contact normals must be non-zero and points finite")
-    return p, n / lengths[:, None]
-
-
-def force_closure(points: ArrayLike, normals: ArrayLike, *, mu: float = DEFAULT_MU) -> bool:
-    """Nguyen's two-contact test: the line through both contacts lies in both friction cones.
-
-    Parameters
-    ----------
-    points, normals
-        (2, 3) contact points and the object's outward unit normals there.
-    mu
-        Coefficient of friction; the cones' half-angle is ``arctan mu``.
-
-    Returns
-    -------
-    bool
-        True when the angle between the line and each inward normal is at most ``arctan mu``.
-    """
-    p, n = _contacts(points, normals)
-    if len(p) != 2:
-        raise UsageError(f"the two-contact test needs exactly 2 contacts, got {len(p)}")
-    line = p[1] - p[0]
-    length = float(np.linalg.norm(line))
-    if length < 1e-12:
-        return False
-    line /= length
-    half = math.atan(mu) + 1e-9
-    a0 = math.acos(float(np.clip(np.dot(line, -n[0]), -1.0, 1.0)))
-    a1 = math.acos(float(np.clip(np.dot(-line, -n[1]), -1.0, 1.0)))
-    return a0 <= half and a1 <= half
-
-
-def _tangents(inward: FloatArray) -> tuple[FloatArray, FloatArray]:
-    """A tangent basis whose first vector is the projection of "up" (x when the face is level)."""
-    t1 = _UP - np.dot(_UP, inward) * inward
-    if np.linalg.norm(t1) < 1e-6:
-        t1 = np.array([1.0, 0.0, 0.0]) - inward[0] * inward
-    t1 /= np.linalg.norm(t1)
-    return t1, np.cross(inward, t1)
-
-
-def wrench_primitives(
-    points: ArrayLike,
-    normals: ArrayLike,
-    com: ArrayLike,
-    *,
-    mu: float = DEFAULT_MU,
-    soft: bool = True,
-    pad_radius: float = DEFAULT_PAD_RADIUS,
-    cone_edges: int = DEFAULT_CONE_EDGES,
-    torque_scale: float = 1.0,
-) -> FloatArray:
-    """The wrenches (force, torque / ``torque_scale``) one newton of contact force can exert.
-
-    Parameters
-    ----------
-    points, normals
-        (k, 3) contact points and outward unit normals of the object there.
-    com
-        The object's centre of mass: torques are taken about it.
-    mu
-        Coefficient of friction.
-    soft
-        Add the soft-finger torsion primitives ``±pad_radius · n`` at each contact.
-    pad_radius
-        Radius (m) at which the torsional friction of a soft pad acts.
-    cone_edges
-        Unit forces on each friction cone's boundary; the first is tilted straight up.
-    torque_scale
-        λ, metres: torques are divided by it so forces and torques compare.
-
-    Returns
-    -------
-    numpy.ndarray
-        (k · (cone_edges + 2·soft), 6) rows ``(fx, fy, fz, τx/λ, τy/λ, τz/λ)``.
-    """
-    p, n = _contacts(points, normals)
-    c = np.asarray(com, dtype=float).reshape(3)
-    if cone_edges < 3:
-        raise UsageError(f"cone_edges must be at least 3, got {cone_edges}")
-    if mu < 0 or torque_scale <= 0 or pad_radius < 0:
-        raise UsageError("mu and pad_radius must be ≥ 0 and torque_scale > 0")
-    rows = []
-    angles = 2.0 * np.pi * np.arange(cone_edges) / cone_edges
-    for point, normal in zip(p, n, strict=True):
-        inward = -normal
-        t1, t2 = _tangents(inward)
-        forces = inward + mu * (np.cos(angles)[:, None] * t1 + np.sin(angles)[:, None] * t2)
-        forces /= np.linalg.norm(forces, axis=1)[:, None]
-        torques = np.cross(point - c, forces) / torque_scale
-        rows.append(np.hstack([forces, torques]))
-        if soft:
-            twist = pad_radius * inward / torque_scale
-            rows.append(np.array([[0, 0, 0, *twist], [0, 0, 0, *(-twist)]], dtype=float))
-    return np.vstack(rows)
-
-
-def ferrari_canny(
-    points: ArrayLike,
-    normals: ArrayLike,
-    com: ArrayLike,
-    *,
-    mu: float = DEFAULT_MU,
-    soft: bool = True,
-    pad_radius: float = DEFAULT_PAD_RADIUS,
-    cone_edges: int = DEFAULT_CONE_EDGES,
-    torque_scale: float = 1.0,
-) -> float:
-    """Ferrari–Canny ε (L1): the largest ball about the origin inside the grasp wrench hull.
-
-    The hull is that of :func:`wrench_primitives` (total contact force ≤ 1 N); ε is in
-    newtons (torques divided by ``torque_scale``). 0 when the grasp cannot resist some wrench
-    (two hard contacts never resist a torque about the line joining them).
-    """
-    w = wrench_primitives(
-        points,
-        normals,
-        com,
-        mu=mu,
-        soft=soft,
-        pad_radius=pad_radius,
-        cone_edges=cone_edges,
-        torque_scale=torque_scale,
-    )
-    if np.linalg.matrix_rank(w, tol=1e-9) < 6:
-        return 0.0
-    try:
-        hull = ConvexHull(w)
-    except QhullError:  # flat: the wrenches span fewer than six dimensions
-        return 0.0
-    distances = -hull.equations[:, -1]  # offsets b of n·x + b ≤ 0, n unit
-    return float(max(0.0, distances.min()))
-
-
-def least_force(
-    points: ArrayLike,
-    normals: ArrayLike,
-    com: ArrayLike,
-    mass: float,
-    *,
-    mu: float = DEFAULT_MU,
-    soft: bool = True,
-    pad_radius: float = DEFAULT_PAD_RADIUS,
-    cone_edges: int = DEFAULT_CONE_EDGES,
-    gravity: float = GRAVITY,
-) -> float | None:
-    """The least total contact force (N) that holds ``mass`` kg against gravity, or None.
-
-    A linear programme over :func:`wrench_primitives`: non-negative amounts of each unit
-    primitive whose wrenches cancel the weight ``(0, 0, −m g)`` acting at ``com``; the sum of
-    the amounts is the total force (the twist primitives count as a force at the pad radius).
-    None when no contact forces can hold the object (hard contacts off the centre of mass).
-    """
-    if mass <= 0:
-        raise UsageError(f"mass must be > 0 kg, got {mass}")
-    w = wrench_primitives(
-        points, normals, com, mu=mu, soft=soft, pad_radius=pad_radius, cone_edges=cone_edges
-    )
-    weight = np.array([0.0, 0.0, -mass * gravity, 0.0, 0.0, 0.0])
-    res = linprog(np.ones(len(w)), A_eq=w.T, b_eq=-weight, bounds=(0, None), method="highs")
-    if res.status != 0:
-        return None
-    return float(res.fun)
-
-
-def torque_scale(poly: Polyhedron) -> float:
-    """λ = √(tr I / m) of a uniform solid polyhedron, metres (for a box a×b×c: √((a²+b²+c²)/6))."""
-    return math.sqrt(_second_moment(poly) * 2.0)
-
-
-def _mesh(poly: Polyhedron) -> trimesh.Trimesh:
-    tris = [(f[0], f[k], f[k + 1]) for f in poly.faces for k in range(1, len(f) - 1)]
-    return trimesh.Trimesh(vertices=poly.vertices, faces=np.asarray(tris), process=False)
-
-
-def _second_moment(poly: Polyhedron) -> float:
-    """E|x − c|² over the solid, m²."""
-    mesh = _mesh(poly)
-    inertia = np.asarray(mesh.moment_inertia, dtype=float)  # density 1, about the centre of mass
-    volume = float(mesh.volume)
-    if volume <= 0:
-        raise UsageError("the polyhedron has no volume")
-    return float(np.trace(inertia)) / (2.0 * volume)
-
-
-# ---------------------------------------------------------------------------------------------
-# The layered model of objects made of boxes
-# ---------------------------------------------------------------------------------------------
-
-
-def _polygon_moments(polygon: FloatArray) -> tuple[float, FloatArray, float]:
-    """Area, centroid and E|p − c|² (m²) of a simple polygon given counter-clockwise."""
-    x, y = polygon[:, 0], polygon[:, 1]
-    xn, yn = np.roll(x, -1), np.roll(y, -1)
-    cross = x * yn - xn * y
-    area = 0.5 * float(cross.sum())
-    cx = float(((x + xn) * cross).sum()) / (6.0 * area)
-    cy = float(((y + yn) * cross).sum()) / (6.0 * area)
-    ixx = float(((y * y + y * yn + yn * yn) * cross).sum()) / 12.0  # ∫ y² dA
-    iyy = float(((x * x + x * xn + xn * xn) * cross).sum()) / 12.0  # ∫ x² dA
-    return area, np.array([cx, cy]), (ixx + iyy) / area - (cx * cx + cy * cy)
-
-
-@dataclass(frozen=True, eq=False)
-class SectionBlock:
-    """Material between heights ``z0`` and ``z1`` whose horizontal section is ``polygon``.
-
-    Attributes
-    ----------
-    polygon
-        (k, 2) corners, counter-clockwise seen from above; side k joins corners k and k + 1.
-    z0, z1
-        The block's bottom and top, metres.
-    layers
-        Indices of the exploration layers (:attr:`~tactile_kb.geometry.model.ObjectModel.layers`) it
-        comes from.
-    """
-
-    polygon: FloatArray
-    z0: float
-    z1: float
-    layers: tuple[int, ...]
-
-    @property
-    def shape(self) -> shapely.Polygon:
-        """The polygon as a shapely polygon."""
-        return shapely.Polygon(self.polygon)
-
-    @property
-    def area(self) -> float:
-        """Area of the section, m²."""
-        return _polygon_moments(self.polygon)[0]
-
-    @property
-    def volume(self) -> float:
-        """Volume of the block, m³."""
-        return self.area * (self.z1 - self.z0)
-
-
-@dataclass(frozen=True, eq=False)
-class SectionSolid:
-    """A prism-like model of a layered exploration: contour polygons extruded as vertical walls.
-
-    Attributes
-    ----------
-    blocks
-        Bottom up; the first stands on the table (z = 0), the last ends at ``height``.
-    height
-        The top: the touched top when ``top_touched``, else the highest layer at which contact
-        was kept (a lower bound: the true top lies below the next z-increment).
-    top_touched
-        True when a contact found a top above the highest layer.
-    volume
-        m³.
-    centroid
-        The centre of mass (uniform density), metres.
-    second_moment
-        E|x − c|² over the solid, m² (λ = √(2 · second_moment) is its :func:`torque_scale`).
-    """
-
-    blocks: tuple[SectionBlock, ...]
-    height: float
-    top_touched: bool
-    volume: float
-    centroid: tuple[float, float, float]
-    second_moment: float
-
-    @property
-    def torque_scale(self) -> float:
-        """λ = √(tr I / m), metres."""
-        return math.sqrt(2.0 * self.second_moment)
-
-    @property
-    def note(self) -> str:
-        """The height assumption in words."""
-        top = (
-            "the top the finger touched"
-            if self.top_touched
-            else "the highest layer at which contact was kept (the top was not touched: the "
-            "true top lies higher, up to one z-increment, and the centre of mass with it)"
-        )
-        blocks = "" if len(self.blocks) == 1 else f" in {len(self.blocks)} blocks"
-        return (
-            f"planned on the layer contours extruded as vertical walls{blocks} from the table "
-            f"to z = {self.height * 1000:.1f} mm, {top}"
-        )
-
-
-def _layer_polygon(contour: FloatArray) -> FloatArray | None:
-    """A layer contour as a simple counter-clockwise polygon (the largest part), or None."""
-    c = np.asarray(contour, dtype=float).reshape(-1, 2)
-    if len(c) < 3:
-        return None
-    shape = shapely.Polygon(c)
-    if not shape.is_valid:
-        fixed = shapely.validation.make_valid(shape)
-        parts = [g for g in getattr(fixed, "geoms", [fixed]) if isinstance(g, shapely.Polygon)]
-        if not parts:
-            return None
-        shape = max(parts, key=lambda g: g.area)
-    if shape.area <= 1e-8:  # below 0.1 cm²: not a section of an object
-        return None
-    shape = shapely.geometry.polygon.orient(shape.simplify(0.0), 1.0)
-    return np.asarray(shape.exterior.coords, dtype=float)[:-1]
-
-
-def section_solid(model: ObjectModel) -> SectionSolid | None:
-    """The layered model of ``model``: its closed layer contours extruded, or None without any.
-
-    Consecutive layers whose contours differ by less than :data:`SAME_CONTOUR` of their area
-    form one block (its polygon is the smaller contour); block boundaries lie half-way between
-    layers, the first block starts on the table (z = 0), and the last ends at the top the
-    finger touched, or else at the highest layer (the walls are assumed vertical).
-
-    Examples
-    --------
-    >>> from tactile_kb.touch.finger import builtin_finger
-    >>> from tactile_kb.geometry.model import build_model
-    >>> from tactile_kb.solids import l_shape
-    >>> from tactile_kb.touch.synthetic import sample_layers
-    >>> record = sample_layers(l_shape(0.12, 0.08, 0.04, 0.04), builtin_finger("4"), [0.01, 0.03])
-    >>> solid = section_solid(build_model(record))
-    >>> len(solid.blocks), solid.height, solid.top_touched
-    (1, 0.03, False)
-    >>> [round(x, 4) + 0.0 for x in solid.centroid], round(solid.volume * 1e6, 1)
-    ([-0.01, -0.01, 0.015], 192.0)
-    """
-    layers = []
-    for lay in sorted(model.layers, key=lambda s: s.z):
-        if not lay.closed:
-            continue
-        poly = _layer_polygon(lay.contour)
-        if poly is not None:
-            layers.append((lay.index, lay.z, poly))
-    if not layers:
-        return None
-    top_layer = layers[-1][1]
-    cos_up = math.cos(math.radians(TOP_NORMAL_DEG))
-    tops = [c.point[2] for c in model.record.contacts if c.normal[2] >= cos_up]
-    touched = [z for z in tops if z > top_layer + SECTION_TOL]
-    height = max(touched) if touched else top_layer
-    groups: list[list[tuple[int, float, FloatArray]]] = [[layers[0]]]
-    for item in layers[1:]:
-        a, b = shapely.Polygon(groups[-1][-1][2]), shapely.Polygon(item[2])
-        if a.symmetric_difference(b).area <= SAME_CONTOUR * min(a.area, b.area):
-            groups[-1].append(item)
-        else:
-            groups.append([item])
-    blocks = []
-    for k, group in enumerate(groups):
-        z0 = 0.0 if k == 0 else (groups[k - 1][-1][1] + group[0][1]) / 2.0
-        z1 = height if k == len(groups) - 1 else (group[-1][1] + groups[k + 1][0][1]) / 2.0
-        poly = min((g[2] for g in group), key=lambda p: _polygon_moments(p)[0])
-        blocks.append(SectionBlock(poly, z0, z1, tuple(g[0] for g in group)))
-    masses, centres, spreads = [], [], []
-    for b in blocks:
-        area, c, spread = _polygon_moments(b.polygon)
-        h = b.z1 - b.z0
-        masses.append(area * h)
-        centres.append([c[0], c[1], (b.z0 + b.z1) / 2.0])
-        spreads.append(spread + h * h / 12.0)  # about the block's own centroid
-    m = np.asarray(masses)
-    volume = float(m.sum())
-    if volume <= 0.0:
-        return None
-    cs = np.asarray(centres)
-    com = (m[:, None] * cs).sum(axis=0) / volume
-    second = float((m * (np.asarray(spreads) + ((cs - com) ** 2).sum(axis=1))).sum()) / volume
-    return SectionSolid(tuple(blocks), height, bool(touched), volume, _vec(com), second)
-
-
-# ---------------------------------------------------------------------------------------------
-# Planning
-# ---------------------------------------------------------------------------------------------
 
 
 @dataclass(frozen=True)
@@ -812,8 +383,8 @@ def plan_grasp(
         )
         return GraspCandidate(
             faces=pair,
-            points=(_vec(points[0]), _vec(points[1])),
-            normals=(_vec(normals[0]), _vec(normals[1])),
+            points=(vec3(points[0]), vec3(points[1])),
+            normals=(vec3(normals[0]), vec3(normals[1])),
             angle_deg=angle,
             com_offset=offset,
             width=width,
@@ -904,17 +475,13 @@ def plan_grasp(
         tuple(candidates),
         reason,
         tuple(rejected),
-        _vec(com),
+        vec3(com),
         weight,
         params,
         basis,
         notes,
         solid,
     )
-
-
-def _vec(v: Sequence[float] | FloatArray) -> tuple[float, float, float]:
-    return (float(v[0]), float(v[1]), float(v[2]))
 
 
 def _grasp_on_pair(

@@ -45,6 +45,7 @@ from numpy.typing import NDArray
 from pydantic import BaseModel, ConfigDict, Field, field_validator
 
 from tactile_kb.errors import LayoutFileError, Problem, UsageError
+from tactile_kb.types import Vec3
 from tactile_kb.yaml_source import Source, format_path, load_yaml, validate
 
 __all__ = [
@@ -59,7 +60,6 @@ __all__ = [
     "load_layout",
 ]
 
-Vec3 = tuple[float, float, float]
 
 DEFAULT_TIP_RADIUS = 0.005
 """ρ for the built-in layouts: a 5 mm hemispherical tip (objects of 2–30 cm)."""

@@ -58,18 +58,17 @@ from dataclasses import asdict, dataclass, field, replace
 from typing import Literal
 
 import numpy as np
-from numpy.typing import NDArray
 
 from tactile_kb.errors import ExplorationError, UsageError
 from tactile_kb.record import Contact, ExplorationRecord, Layer
 from tactile_kb.touch.world import Motion, Vec3, World
+from tactile_kb.types import FloatArray
 
 __all__ = ["Controller", "Mark", "ServoParams"]
 
 Mark = Literal["contact", "layer", "complete"]
 """What :meth:`Controller.run` yields: the first touch, a finished layer, the end."""
 
-FArray = NDArray[np.float64]
 
 _Z = np.array([0.0, 0.0, 1.0])
 
@@ -168,14 +167,14 @@ class _Follow:
 
     sensor: int
     group: tuple[int, ...]
-    r0: FArray = field(default_factory=lambda: np.zeros(3))
+    r0: FloatArray = field(default_factory=lambda: np.zeros(3))
 
 
-def _v3(a: Sequence[float] | FArray) -> Vec3:
+def _v3(a: Sequence[float] | FloatArray) -> Vec3:
     return (float(a[0]), float(a[1]), float(a[2]))
 
 
-def _unit(v: FArray) -> FArray:
+def _unit(v: FloatArray) -> FloatArray:
     n = float(np.linalg.norm(v))
     return v / n if n > 1e-12 else v
 
@@ -273,15 +272,19 @@ class Controller:
             closed=tuple(sorted(closed | set(m.closed))),
         )
 
-    def _move(self, start: FArray | Vec3, direction: FArray | Vec3, length: float) -> Motion:
+    def _move(
+        self, start: FloatArray | Vec3, direction: FloatArray | Vec3, length: float
+    ) -> Motion:
         return self._track(self.world.move(_v3(start), _v3(direction), float(length)))
 
-    def _slide(self, start: FArray | Vec3, direction: FArray, length: float, sensor: int) -> Motion:
+    def _slide(
+        self, start: FloatArray | Vec3, direction: FloatArray, length: float, sensor: int
+    ) -> Motion:
         m = self._track(self.world.slide(_v3(start), _v3(direction), float(length), sensor))
         self._check_alignment(direction, m, sensor)
         return m
 
-    def _check_alignment(self, command: FArray, m: Motion, sensor: int) -> None:
+    def _check_alignment(self, command: FloatArray, m: Motion, sensor: int) -> None:
         """Stop when a surface slid along is turned further from its sensor than the finger's
         ``align_deg``: the slide went along the surface, not where the sensor said it would."""
         limit = self.finger.align_deg
@@ -429,7 +432,7 @@ class Controller:
             self._note(str(exc))
         yield "complete"
 
-    def _first_contact(self) -> tuple[FArray, _Follow]:
+    def _first_contact(self) -> tuple[FloatArray, _Follow]:
         """Approach the object horizontally (+x) on lines across the hint until a sensor closes."""
         hint = self.world.hint
         gap = self.rho + self.params.approach_margin
@@ -457,7 +460,7 @@ class Controller:
             f"at heights {', '.join(f'{h:.3f}' for h in heights)} m)"
         )
 
-    def _tangent(self, f: _Follow) -> FArray | None:
+    def _tangent(self, f: _Follow) -> FloatArray | None:
         """The horizontal direction associated with the followed contact (object on the left)."""
         n = -f.r0
         t = np.cross(_Z, n)
@@ -467,7 +470,7 @@ class Controller:
         return t / norm
 
     def _slide_sampled(
-        self, pos: FArray, direction: FArray, f: _Follow, length: float
+        self, pos: FloatArray, direction: FloatArray, f: _Follow, length: float
     ) -> tuple[Motion, float]:
         """Slide up to ``length`` along the surface under ``f``, recording a ``"slide"`` contact
         every :attr:`spacing`; the last motion (not recorded) and the distance travelled."""
@@ -482,8 +485,8 @@ class Controller:
             pos = np.asarray(m.end, dtype=float)
 
     def _contour(
-        self, pos: FArray, f: _Follow, *, last: bool = False
-    ) -> tuple[bool, FArray, _Follow]:
+        self, pos: FloatArray, f: _Follow, *, last: bool = False
+    ) -> tuple[bool, FloatArray, _Follow]:
         """Follow the contour in the current plane z = const; return (closed, position, follow).
 
         The layer is closed when the first surface slid along is touched a second time, when
@@ -504,8 +507,8 @@ class Controller:
             self._surfaces += [(float(pos[2]), g) for g in segs if not g.edge]
 
     def _trace(
-        self, pos: FArray, f: _Follow, last: bool, edges: _EdgeTouches, segs: list[_Segment]
-    ) -> tuple[bool, FArray, _Follow]:
+        self, pos: FloatArray, f: _Follow, last: bool, edges: _EdgeTouches, segs: list[_Segment]
+    ) -> tuple[bool, FloatArray, _Follow]:
         p = self.params
         fresh: int | None = len(self.contacts) - 1 if self._last_is_touch() else None
         since = 0.0  # distance slid since the fresh touch
@@ -599,7 +602,7 @@ class Controller:
             return bool((self._dirs[list(m.closed)] @ f.r0 >= math.cos(math.radians(40.0))).all())
         return False
 
-    def _on_first(self, segs: list[_Segment], pos: FArray, f: _Follow) -> bool:
+    def _on_first(self, segs: list[_Segment], pos: FloatArray, f: _Follow) -> bool:
         """Whether a new touch at ``pos`` is the first surface of the layer met a second time."""
         first = segs[0]
         if not (set(f.group) & first.group) or all(s.group == first.group for s in segs):
@@ -609,7 +612,7 @@ class Controller:
         off = float(np.linalg.norm(d - s * first.direction))
         return off <= max(0.002, 0.2 * self.rho) and s >= -(self.params.l3 + self.rho)
 
-    def _before_first(self, segs: list[_Segment], pos: FArray, f: _Follow) -> bool:
+    def _before_first(self, segs: list[_Segment], pos: FloatArray, f: _Follow) -> bool:
         """Whether the surface just left ends where the layer's first surface begins."""
         if len(segs) < 2 or set(f.group) & segs[0].group:
             return False
@@ -619,7 +622,7 @@ class Controller:
         off = float(np.linalg.norm(d - s * first.direction))
         return off <= 2.0 * self.rho and s >= -self.rho
 
-    def _back_on(self, segs: list[_Segment], pos: FArray, f: _Follow) -> bool:
+    def _back_on(self, segs: list[_Segment], pos: FloatArray, f: _Follow) -> bool:
         """Whether ``pos`` (a new contact of ``f``) lies on a surface already followed in this layer."""
         reach_back = self.params.l3 + self.rho
         for seg in segs[:-1]:
@@ -632,7 +635,9 @@ class Controller:
                 return True
         return False
 
-    def _search(self, pos: FArray, t: FArray, f: _Follow) -> tuple[FArray, _Follow] | None:
+    def _search(
+        self, pos: FloatArray, t: FloatArray, f: _Follow
+    ) -> tuple[FloatArray, _Follow] | None:
         """The l1, l2, l3 cycle after a loss of contact; the new contact, or None."""
         p = self.params
         towards = np.cross(_Z, t)
@@ -663,7 +668,7 @@ class Controller:
             )
         return None
 
-    def _move_on(self, pos: FArray, direction: FArray, length: float) -> Motion:
+    def _move_on(self, pos: FloatArray, direction: FloatArray, length: float) -> Motion:
         """Move ``length`` along ``direction`` through losses of contact; stop at anything else."""
         done = 0.0
         while True:
@@ -674,8 +679,8 @@ class Controller:
                 return m
 
     def _z_increment(
-        self, pos: FArray, f: _Follow, centre: FArray | None = None
-    ) -> tuple[FArray, _Follow] | None:
+        self, pos: FloatArray, f: _Follow, centre: FloatArray | None = None
+    ) -> tuple[FloatArray, _Follow] | None:
         """Move up by z_step; the first contact of the next layer, or None when contact is lost.
 
         Contact kept (a vertical surface): go on from there. Contact lost (a surface sloping
@@ -729,8 +734,8 @@ class Controller:
         return None
 
     def _regain(
-        self, pos: FArray, f: _Follow, centre: FArray | None
-    ) -> tuple[FArray, _Follow] | None:
+        self, pos: FloatArray, f: _Follow, centre: FloatArray | None
+    ) -> tuple[FloatArray, _Follow] | None:
         """Search horizontally for the object after a z increment: towards ``centre`` or r0."""
         towards = _unit(np.array([f.r0[0], f.r0[1], 0.0]))
         if centre is not None:
@@ -758,7 +763,7 @@ class Controller:
         size, size_below = _radius(contacts), _radius(below)
         return size - self.rho < 2.0 * self.rho and size < 0.6 * size_below
 
-    def _probe(self, centre: FArray | None) -> None:
+    def _probe(self, centre: FloatArray | None) -> None:
         """Touch every surface slid along in one layer only once more, at another height."""
         heights = sorted(set(self._heights))
         if len(heights) < 2 or centre is None:
@@ -789,7 +794,7 @@ class Controller:
                 return
 
     def _probe_one(
-        self, aim: FArray, out: FArray, z: float, centre: FArray, group: frozenset[int]
+        self, aim: FloatArray, out: FloatArray, z: float, centre: FloatArray, group: frozenset[int]
     ) -> bool:
         """Approach a surface at height ``z`` along its outward normal ``out``, from outside the
         hint box, towards the point ``aim`` of its stretch in a layer, and slide along it;
@@ -807,7 +812,7 @@ class Controller:
         target = np.array([aim[0], aim[1], z])
         far = target + out * (_exit(target, out, lo, hi) + clear)
         safe = float(hi[2]) + clear
-        legs: list[tuple[FArray, float]] = []
+        legs: list[tuple[FloatArray, float]] = []
         if float(np.linalg.norm(away)) > 0.5:
             legs.append((away, _exit(here, away, lo, hi) + clear))
         for leg_dir, length in legs:
@@ -924,10 +929,10 @@ class _Segment:
     """A surface slid along in a layer: its sensors, where the slide began, its direction."""
 
     group: frozenset[int]
-    start: FArray
-    direction: FArray
+    start: FloatArray
+    direction: FloatArray
     length: float
-    r0: FArray
+    r0: FloatArray
     edge: bool = False
 
 
@@ -960,7 +965,7 @@ class _EdgeTouches:
         return self.dropped
 
 
-def _exit(point: FArray, direction: FArray, lo: FArray, hi: FArray) -> float:
+def _exit(point: FloatArray, direction: FloatArray, lo: FloatArray, hi: FloatArray) -> float:
     """How far from ``point`` along horizontal unit ``direction`` the box ``lo``–``hi`` ends (x, y)."""
     t = math.inf
     for k in range(2):
@@ -977,11 +982,11 @@ def _radius(contacts: Sequence[Contact]) -> float:
     return float(np.linalg.norm(xy - xy.mean(axis=0), axis=1).mean())
 
 
-def _centre(contacts: Sequence[Contact]) -> FArray | None:
+def _centre(contacts: Sequence[Contact]) -> FloatArray | None:
     """The mean tip centre of ``contacts`` (None without any)."""
     if not contacts:
         return None
-    centre: FArray = np.asarray([c.centre for c in contacts], dtype=float).mean(axis=0)
+    centre: FloatArray = np.asarray([c.centre for c in contacts], dtype=float).mean(axis=0)
     return centre
 
 

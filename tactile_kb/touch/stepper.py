@@ -52,6 +52,7 @@ from tactile_kb.errors import UsageError
 from tactile_kb.touch.explorers import WorldExplorer
 from tactile_kb.touch.finger import Finger
 from tactile_kb.touch.world import CONTACT_TOL, Box, Event, Motion, MotionKind, Vec3, Workspace
+from tactile_kb.types import FloatArray
 
 __all__ = [
     "BLOCK_TOL",
@@ -72,12 +73,10 @@ SAME_CONTACT_DEG = 1.0
 """Degrees: a contact on a triangle's side this close in direction to a contact inside a face
 is the same contact (see :meth:`StepperWorld._touching`)."""
 
-FArray = NDArray[np.float64]
-
 
 def _closest(
-    tri: FArray, normals: FArray, sides: FArray, points: FArray
-) -> tuple[FArray, NDArray[np.bool_]]:
+    tri: FloatArray, normals: FloatArray, sides: FloatArray, points: FloatArray
+) -> tuple[FloatArray, NDArray[np.bool_]]:
     """The closest point of each triangle (K, 3, 3) to the matching point (K, 3), and whether
     it lies inside the triangle (not on a side).
 
@@ -101,11 +100,11 @@ def _closest(
         closer = d < best
         best = np.where(closer, d, best)
         edge_q = np.where(closer[:, None], q, edge_q)
-    out: FArray = np.where(inside[:, None], proj, edge_q)
+    out: FloatArray = np.where(inside[:, None], proj, edge_q)
     return out, inside
 
 
-def default_workspace(bounds: FArray, radius: float) -> Workspace:
+def default_workspace(bounds: FloatArray, radius: float) -> Workspace:
     """A workspace around an object's ``bounds`` (2, 3): its size plus 0.15 m each side, floor ρ."""
     lo, hi = np.asarray(bounds[0], float), np.asarray(bounds[1], float)
     pad = 0.15
@@ -115,7 +114,7 @@ def default_workspace(bounds: FArray, radius: float) -> Workspace:
     )
 
 
-def _v3(a: Sequence[float] | FArray) -> Vec3:
+def _v3(a: Sequence[float] | FloatArray) -> Vec3:
     return (float(a[0]), float(a[1]), float(a[2]))
 
 
@@ -212,7 +211,7 @@ class StepperWorld:
         return self._hint
 
     # sensing ------------------------------------------------------------------------------------
-    def _touching(self, pts: FArray) -> tuple[NDArray[np.intp], FArray]:
+    def _touching(self, pts: FloatArray) -> tuple[NDArray[np.intp], FloatArray]:
         """The contacts of the tip centres ``pts`` (P, 3): point indices and unit directions.
 
         One direction per triangle within ρ + CONTACT_TOL, towards its closest point, except
@@ -246,18 +245,18 @@ class StepperWorld:
             pi, u = pi[keep], u[keep]
         return pi, u
 
-    def _contacts(self, p: FArray) -> FArray:
+    def _contacts(self, p: FloatArray) -> FloatArray:
         """Unit directions from ``p`` to the surface within ρ + CONTACT_TOL, (k, 3)."""
         return self._touching(np.asarray(p, dtype=float).reshape(1, 3))[1]
 
-    def _fired(self, p: FArray) -> tuple[int, ...]:
+    def _fired(self, p: FloatArray) -> tuple[int, ...]:
         d = self._contacts(p)
         if len(d) == 0:
             return ()
         cos = d @ self._dirs.T
         return tuple(int(i) for i in np.flatnonzero((cos >= self._cos - 1e-12).any(axis=0)))
 
-    def _fired_many(self, pts: FArray) -> NDArray[np.bool_]:
+    def _fired_many(self, pts: FloatArray) -> NDArray[np.bool_]:
         """(P, S) bool: sensor ``s`` is ON with the tip centre at ``pts[p]`` (as :meth:`_fired`)."""
         out = np.zeros((len(pts), len(self._dirs)), dtype=bool)
         pi, u = self._touching(pts)
@@ -276,10 +275,10 @@ class StepperWorld:
         return float(np.linalg.norm(q - p, axis=1).min())
 
     # interval algebra ---------------------------------------------------------------------------
-    def _intervals(self, a: FArray, u: FArray, r: float) -> tuple[FArray, FArray]:
+    def _intervals(self, a: FloatArray, u: FloatArray, r: float) -> tuple[FloatArray, FloatArray]:
         """Entry and exit parameters of the line a + t·u in every primitive of radius r."""
-        los: list[FArray] = []
-        his: list[FArray] = []
+        los: list[FloatArray] = []
+        his: list[FloatArray] = []
         # vertices: |a - v + t u|^2 = r^2
         w = a - self._verts
         b = w @ u
@@ -348,7 +347,7 @@ class StepperWorld:
         his.append(hi)
         return np.concatenate(los), np.concatenate(his)
 
-    def _block_at(self, a: FArray, u: FArray, limit: float) -> float:
+    def _block_at(self, a: FloatArray, u: FloatArray, limit: float) -> float:
         """Where along the segment the tip would start to penetrate (``inf`` if nowhere)."""
         lo, hi = self._intervals(a, u, self._rho - BLOCK_TOL)
         real = (hi - lo > _EPS_T) & (hi > _EPS_T) & (lo > -1e-10) & (lo <= limit)
@@ -399,13 +398,13 @@ class StepperWorld:
                 t = -t
         return self._run("slide", _v3(a), _v3(t), length)
 
-    def _measure(self, p: FArray) -> Vec3:
+    def _measure(self, p: FloatArray) -> Vec3:
         if self.noise > 0:
             return _v3(p + self._rng.normal(0.0, self.noise, 3))
         return _v3(p)
 
     def _changes(
-        self, a: FArray, u: FArray, marks: FArray, fired0: tuple[int, ...]
+        self, a: FloatArray, u: FloatArray, marks: FloatArray, fired0: tuple[int, ...]
     ) -> Iterator[int]:
         """Indices ``i`` of the gaps ``marks[i]..marks[i+1]`` whose middle state differs from
         ``fired0``, in order (the sensors are evaluated in batches)."""

@@ -29,15 +29,13 @@ import numpy as np
 import shapely.geometry
 import shapely.ops
 import trimesh
-from numpy.typing import NDArray
 
 from tactile_kb.errors import UsageError
 from tactile_kb.record import Contact, ExplorationRecord, Layer
 from tactile_kb.touch.finger import Finger
+from tactile_kb.types import FloatArray, vec3
 
 __all__ = ["mesh_faces", "mesh_planes", "sample_layers", "sample_record"]
-
-FloatArray = NDArray[np.float64]
 
 
 def mesh_faces(mesh: trimesh.Trimesh) -> list[tuple[FloatArray, list[int]]]:
@@ -136,7 +134,7 @@ def sample_record(
         zs = mesh.vertices[mesh.faces[tris]].reshape(-1, 3)[:, 2]
         if normal[2] < -0.999 and float(np.abs(zs).max()) <= 1e-9 * height + 1e-12:
             continue  # the face resting on the table
-        sensor = finger.nearest(_vec(-normal))
+        sensor = finger.nearest(vec3(-normal))
         if quantise and sensor is None:
             notes.append(f"no sensor feels the face with normal {np.round(normal, 3).tolist()}")
             continue
@@ -165,25 +163,21 @@ def sample_record(
             if quantise and sensor is not None
             else -normal
         )
-        fired = finger.fired([_vec(-normal)])
+        fired = finger.fired([vec3(-normal)])
         for c in centres:
             contacts.append(
                 Contact(
                     step=len(contacts),
-                    centre=_vec(c),
+                    centre=vec3(c),
                     sensors=fired,
                     sensor=-1 if sensor is None else sensor,
-                    direction=_vec(r0),
-                    point=_vec(c + rho * r0),
+                    direction=vec3(r0),
+                    point=vec3(c + rho * r0),
                     kind="touch",
                     phase="synthetic",
                 )
             )
     return _record(mesh, finger, contacts, seed, per_face, noise, quantise, notes, name)
-
-
-def _vec(v: FloatArray) -> tuple[float, float, float]:
-    return (float(v[0]), float(v[1]), float(v[2]))
 
 
 def _record(
@@ -258,7 +252,7 @@ def sample_layers(
             t_dir = (b - a) / length
             normal = np.array([t_dir[1], -t_dir[0], 0.0])
             k = max(2, int(length / spacing))
-            sensor = finger.nearest(_vec(-normal))
+            sensor = finger.nearest(vec3(-normal))
             if quantise and sensor is None:
                 continue
             r0 = (
@@ -272,11 +266,11 @@ def sample_layers(
                 contacts.append(
                     Contact(
                         step=len(contacts),
-                        centre=_vec(c),
-                        sensors=finger.fired([_vec(-normal)]),
+                        centre=vec3(c),
+                        sensors=finger.fired([vec3(-normal)]),
                         sensor=-1 if sensor is None else sensor,
-                        direction=_vec(r0),
-                        point=_vec(c + rho * r0),
+                        direction=vec3(r0),
+                        point=vec3(c + rho * r0),
                         kind="slide",
                         phase="layer",
                         layer=li,

@@ -59,6 +59,7 @@ from dataclasses import dataclass
 from typing import Literal, Protocol, runtime_checkable
 
 from tactile_kb.touch.finger import Finger
+from tactile_kb.types import Vec3
 
 __all__ = [
     "CONTACT_TOL",
@@ -71,7 +72,6 @@ __all__ = [
     "World",
 ]
 
-Vec3 = tuple[float, float, float]
 
 Event = Literal["touch", "release", "blocked", "limit", "none"]
 """How a motion ended (see the module docstring)."""
