@@ -149,6 +149,19 @@ def ternary_closure(values: np.ndarray[Any, Any], n: int, op: Any) -> np.ndarray
     return a.reshape(-1)
 
 
+@dataclass(frozen=True)
+class _Lookup:
+    """What one look-up found: the bits as integers, and the classes still possible."""
+
+    bits: str
+    x: int
+    known_mask: int
+    t: int
+    known: dict[str, bool]
+    answers: list[int]
+    sets: bool
+
+
 class Engine:
     """Classification over a compiled :class:`~tactile_kb.kb.compiler.KnowledgeBase`.
 
@@ -404,94 +417,116 @@ class Engine:
     ) -> Decision:
         values = self._values(bits)
         lazily = evaluated is not None
-        full = "-" not in bits
         if evaluated is None:
+            full = "-" not in bits
             evaluated = self.ids if full else tuple(v for v in self.ids if values[v] is not None)
+        look = self._lookup(bits, values)
+        common: dict[str, Any] = {"bits": bits, "values": values, "evaluated": evaluated}
+        if not look.answers:
+            return self._inconsistent(look, common)
+        if len(look.answers) > 1:
+            return self._undecided(look, common)
+        label = look.answers[0]
+        if lazily:
+            phase = asked_phase
+        elif look.sets:
+            phase = self._certain_phase_fast(bits, label)
+        else:
+            phase = self._certain_phase(values, label)
+        if label < self.K:
+            return self._matched(label, phase, look, common)
+        return self._otherwise(phase, look, common)
+
+    def _lookup(self, bits: str, values: Mapping[str, bool | None]) -> _Lookup:
+        """The classes still possible for ``bits``: a table look-up for small bases, BDD
+        restrictions for large ones."""
         n = self.n
         x = int(bits.replace("-", "0"), 2) if n else 0
         known_mask = int(bits.translate(_KNOWN), 2) if n else 0
         sets = self._answer_sets
-        known: dict[str, bool] = {}
-        t = 0
         if sets is not None:  # no BDD operation on this path
             t = int(bits.translate(_TERNARY), 3) if n else 0
-            answers = self._members(sets[t])
-        else:
-            known = {k: v for k, v in values.items() if v is not None}
-            answers = self.possible(known)
+            return _Lookup(bits, x, known_mask, t, {}, self._members(sets[t]), True)
+        known = {k: v for k, v in values.items() if v is not None}
+        return _Lookup(bits, x, known_mask, 0, known, self.possible(known), False)
+
+    def _inconsistent(self, look: _Lookup, common: dict[str, Any]) -> Decision:
+        """No class is possible: name the connections the values break."""
+        values = common["values"]
         rules = self.kb.rules
-        common = {"bits": bits, "values": values, "evaluated": evaluated}
-        if not answers:
-            broken = []
-            if sets is not None:
-                broken = [i for i, sat in enumerate(self._satisfiable) if not sat[t]]
-            if not broken:
-                broken = self._violations(values)
-            cited = tuple(
-                f"line {rules.connections[i].line}: {rules.connections[i].text}" for i in broken
-            )
-            why = []
-            for i in broken:
-                mentioned = [v for v in self.conn_names[i] if values[v] is not None]
-                why.append(
-                    ", ".join(f"{v} is {'true' if values[v] else 'false'}" for v in mentioned)
-                )
-            text = "; ".join(f"{c} ({w})" for c, w in zip(cited, why, strict=True))
-            return Decision(
-                label=INCONSISTENT,
-                answer="THE FEATURES CONTRADICT THE CONNECTIONS",
-                phase=None,
-                certain=True,
-                explanation=f"{bits} violates {text}",
-                violated=cited,
-                **common,  # type: ignore[arg-type]
-            )
-        if len(answers) > 1:
-            names_ = [self.labels[i] for i in answers]
-            index = self.kb.index
-            nxt = next(
-                (
-                    v
-                    for v in self.order
-                    if values[v] is None
-                    and (self.forced(known, v) if sets is None else self._forced_at(t, index[v]))
-                    is None
-                ),
-                None,
-            )
-            ask = f"; evaluate {nxt} next" if nxt else ""
-            return Decision(
-                label=UNDECIDED,
-                answer="UNDECIDED",
-                phase=None,
-                certain=False,
-                explanation=f"{bits} leaves {len(answers)} answers possible: "
-                f"{', '.join(names_)}{ask}",
-                **common,  # type: ignore[arg-type]
-            )
-        label = answers[0]
-        if lazily:
-            phase = asked_phase
-        elif sets is not None:
-            phase = self._certain_phase_fast(bits, label)
-        else:
-            phase = self._certain_phase(values, label)
-        after = f", certain after phase {phase}" if phase else ", certain before any evaluation"
-        if label < self.K:
-            k = self.kb.classes[label]
-            term = cube_text(self._match(label, x, known_mask), self.ids)
-            return Decision(
-                label=k.id,
-                answer=k.answer,
-                phase=phase,
-                certain=True,
-                explanation=f"{k.answer}: {bits} matches {term} "
-                f"(class {k.id!r}, line {k.line}){after}",
-                matched=term,
-                **common,  # type: ignore[arg-type]
-            )
+        broken = []
+        if look.sets:
+            broken = [i for i, sat in enumerate(self._satisfiable) if not sat[look.t]]
+        if not broken:
+            broken = self._violations(values)
+        cited = tuple(
+            f"line {rules.connections[i].line}: {rules.connections[i].text}" for i in broken
+        )
+        why = []
+        for i in broken:
+            mentioned = [v for v in self.conn_names[i] if values[v] is not None]
+            why.append(", ".join(f"{v} is {'true' if values[v] else 'false'}" for v in mentioned))
+        text = "; ".join(f"{c} ({w})" for c, w in zip(cited, why, strict=True))
+        return Decision(
+            label=INCONSISTENT,
+            answer="THE FEATURES CONTRADICT THE CONNECTIONS",
+            phase=None,
+            certain=True,
+            explanation=f"{look.bits} violates {text}",
+            violated=cited,
+            **common,
+        )
+
+    def _undecided(self, look: _Lookup, common: dict[str, Any]) -> Decision:
+        """More than one class is possible: say which, and what to evaluate next."""
+        values = common["values"]
+        names_ = [self.labels[i] for i in look.answers]
+        index = self.kb.index
+
+        def forced(v: str) -> bool | None:
+            if look.sets:
+                return self._forced_at(look.t, index[v])
+            return self.forced(look.known, v)
+
+        nxt = next((v for v in self.order if values[v] is None and forced(v) is None), None)
+        ask = f"; evaluate {nxt} next" if nxt else ""
+        return Decision(
+            label=UNDECIDED,
+            answer="UNDECIDED",
+            phase=None,
+            certain=False,
+            explanation=f"{look.bits} leaves {len(look.answers)} answers possible: "
+            f"{', '.join(names_)}{ask}",
+            **common,
+        )
+
+    @staticmethod
+    def _after(phase: str | None) -> str:
+        return f", certain after phase {phase}" if phase else ", certain before any evaluation"
+
+    def _matched(
+        self, label: int, phase: str | None, look: _Lookup, common: dict[str, Any]
+    ) -> Decision:
+        """One class: cite the term of it that the values match."""
+        k = self.kb.classes[label]
+        term = cube_text(self._match(label, look.x, look.known_mask), self.ids)
+        return Decision(
+            label=k.id,
+            answer=k.answer,
+            phase=phase,
+            certain=True,
+            explanation=f"{k.answer}: {look.bits} matches {term} "
+            f"(class {k.id!r}, line {k.line}){self._after(phase)}",
+            matched=term,
+            **common,
+        )
+
+    def _otherwise(self, phase: str | None, look: _Lookup, common: dict[str, Any]) -> Decision:
+        """No class takes the values: the otherwise answer, with the nearest classes."""
+        values = common["values"]
+        rules = self.kb.rules
         near = sorted(
-            ((self._distance(i, x, known_mask), i) for i in range(self.K)),
+            ((self._distance(i, look.x, look.known_mask), i) for i in range(self.K)),
             key=lambda t: (t[0][0], t[1]),
         )
         nearest = tuple((self.labels[i], d) for (d, _), i in near)
@@ -513,9 +548,9 @@ class Engine:
             answer=rules.otherwise_answer,
             phase=phase,
             certain=True,
-            explanation=f"{rules.otherwise_answer}: no class takes {bits}{hint}",
+            explanation=f"{rules.otherwise_answer}: no class takes {look.bits}{hint}",
             nearest=nearest,
-            **common,  # type: ignore[arg-type]
+            **common,
         )
 
     # ----------------------------------------------------------------- batch
