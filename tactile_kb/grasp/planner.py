@@ -119,7 +119,7 @@ TABLE_ANGLE_DEG = 5.0
 TABLE_HEIGHT_TOL = 0.002
 
 
-@dataclass(frozen=True)
+@dataclass(kw_only=True, frozen=True)
 class GraspCandidate:
     """One two-finger grasp on a pair of (nearly) parallel faces.
 
@@ -195,7 +195,7 @@ class Rejection:
     message: str
 
 
-@dataclass(frozen=True)
+@dataclass(kw_only=True, frozen=True)
 class GraspPlan:
     """The best grasp of an object and the ranked alternatives, or why there is none.
 
@@ -346,142 +346,206 @@ def plan_grasp(
     }
     poly = model.polyhedron
     solid = section_solid(model) if poly is None or not model.convex else None
+    opts = _Options(
+        mu=mu,
+        max_opening=max_opening,
+        min_opening=min_opening,
+        margin=margin,
+        max_com_offset=max_com_offset,
+        pad_radius=pad_radius,
+        cone_edges=cone_edges,
+        limit=math.degrees(math.atan(mu)) if max_angle_deg is None else max_angle_deg,
+    )
+    if solid is not None:
+        found = _on_sections(solid, opts, mass, density)
+    elif poly is not None:
+        found = _on_polyhedron(model, poly, opts, mass, density)
+    else:
+        why = model.open_reason or "the touched planes do not bound a region"
+        if model.layers:
+            why += "; no layer contour closed"
+        return GraspPlan(
+            object=name,
+            best=None,
+            candidates=(),
+            reason=f"no closed model to grasp: {why}",
+            params=params,
+        )
+    candidates = sorted(found.candidates, key=lambda c: c.rank_key)
+    best = next((c for c in candidates if c.force_closure), None)
+    reason = (
+        "" if best is not None else _reason(found.parallel, opts.limit, candidates, found.rejected)
+    )
+    return GraspPlan(
+        object=name,
+        best=best,
+        candidates=tuple(candidates),
+        reason=reason,
+        rejected=tuple(found.rejected),
+        com=vec3(found.com),
+        mass=found.weight,
+        params=params,
+        basis=found.basis,
+        notes=found.notes,
+        solid=solid,
+    )
 
-    def assess(
-        pair: tuple[int, int],
-        points: FloatArray,
-        normals: FloatArray,
-        angle: float,
-        offset: float,
-        com: FloatArray,
-        scale: float,
-        weight: float,
-        section: int | None,
-    ) -> GraspCandidate | Rejection:
-        width = float(np.linalg.norm(points[0] - points[1]))
-        if width > max_opening:
-            return Rejection(
-                pair,
-                "too_wide",
-                f"{width * 1000:.1f} mm apart, wider than the pincers "
-                f"({max_opening * 1000:.1f} mm)",
-            )
-        if width < min_opening:
-            return Rejection(pair, "too_narrow", f"{width * 1000:.1f} mm apart, below the minimum")
-        closed = force_closure(points, normals, mu=mu)
-        eps = ferrari_canny(
+
+@dataclass(frozen=True, kw_only=True)
+class _Options:
+    """The pincers and the contact model, as :func:`plan_grasp` was given them."""
+
+    mu: float
+    max_opening: float
+    min_opening: float
+    margin: float
+    max_com_offset: float
+    pad_radius: float
+    cone_edges: int
+    limit: float
+    """The largest angle between the two planes, degrees."""
+
+
+@dataclass(kw_only=True)
+class _Found:
+    """What one strategy found: the candidates, the rejections, and what they were judged on."""
+
+    basis: str
+    com: FloatArray
+    weight: float
+    scale: float
+    notes: tuple[str, ...] = ()
+    candidates: list[GraspCandidate] = field(default_factory=list)
+    rejected: list[Rejection] = field(default_factory=list)
+    parallel: int = 0
+
+    def add(self, out: GraspCandidate | Rejection) -> None:
+        if isinstance(out, Rejection):
+            self.rejected.append(out)
+        else:
+            self.candidates.append(out)
+
+
+def _assess(
+    found: _Found,
+    opts: _Options,
+    pair: tuple[int, int],
+    points: FloatArray,
+    normals: FloatArray,
+    angle: float,
+    offset: float,
+    section: int | None,
+) -> GraspCandidate | Rejection:
+    """A candidate on two grasp points, with its quality; or why the pincers cannot take it."""
+    width = float(np.linalg.norm(points[0] - points[1]))
+    if width > opts.max_opening:
+        return Rejection(
+            pair,
+            "too_wide",
+            f"{width * 1000:.1f} mm apart, wider than the pincers "
+            f"({opts.max_opening * 1000:.1f} mm)",
+        )
+    if width < opts.min_opening:
+        return Rejection(pair, "too_narrow", f"{width * 1000:.1f} mm apart, below the minimum")
+    return GraspCandidate(
+        faces=pair,
+        points=(vec3(points[0]), vec3(points[1])),
+        normals=(vec3(normals[0]), vec3(normals[1])),
+        angle_deg=angle,
+        com_offset=offset,
+        width=width,
+        force_closure=force_closure(points, normals, mu=opts.mu),
+        quality=ferrari_canny(
             points,
             normals,
-            com,
-            mu=mu,
-            pad_radius=pad_radius,
-            cone_edges=cone_edges,
-            torque_scale=scale,
-        )
-        force = least_force(
-            points, normals, com, weight, mu=mu, pad_radius=pad_radius, cone_edges=cone_edges
-        )
-        return GraspCandidate(
-            faces=pair,
-            points=(vec3(points[0]), vec3(points[1])),
-            normals=(vec3(normals[0]), vec3(normals[1])),
-            angle_deg=angle,
-            com_offset=offset,
-            width=width,
-            force_closure=closed,
-            quality=eps,
-            least_force=force,
-            section=section,
-        )
-
-    limit = math.degrees(math.atan(mu)) if max_angle_deg is None else max_angle_deg
-    candidates: list[GraspCandidate] = []
-    rejected: list[Rejection] = []
-    notes: tuple[str, ...] = ()
-    if solid is not None:
-        basis = "sections"
-        com = np.asarray(solid.centroid, dtype=float)
-        weight = float(mass) if mass is not None else density * solid.volume
-        scale = solid.torque_scale
-        notes = (solid.note,)
-        parallel = 0
-        for b in range(len(solid.blocks)):
-            for pair, angle, found in _section_pairs(solid, b, com, limit, margin, max_com_offset):
-                parallel += 1
-                if isinstance(found, Rejection):
-                    rejected.append(found)
-                    continue
-                points, normals, offset = found
-                out = assess(pair, points, normals, angle, offset, com, scale, weight, b)
-                if isinstance(out, Rejection):
-                    rejected.append(out)
-                else:
-                    candidates.append(out)
-    else:
-        if poly is None:
-            why = model.open_reason or "the touched planes do not bound a region"
-            if model.layers:
-                why += "; no layer contour closed"
-            return GraspPlan(name, None, (), f"no closed model to grasp: {why}", params=params)
-        basis = "polyhedron"
-        com = np.asarray(poly.centroid, dtype=float)
-        weight = float(mass) if mass is not None else density * poly.volume
-        scale = torque_scale(poly)
-        if not model.convex:
-            notes = (
-                "the model is not convex and has no layer contours: its centre of mass is that "
-                "of the convex envelope, and grasp lines crossing a concave face are refused",
-            )
-        table = _table_faces(model, poly)
-        nf = len(poly.faces)
-        parallel = 0
-        for i in range(nf):
-            for j in range(i + 1, nf):
-                ni, nj = poly.normals[i], poly.normals[j]
-                angle = math.degrees(math.acos(float(np.clip(-np.dot(ni, nj), -1.0, 1.0))))
-                if angle > limit + 1e-9:
-                    continue
-                parallel += 1
-                pair = (i, j)
-                if i in table or j in table:
-                    rejected.append(Rejection(pair, "table", "uses the table face (the support)"))
-                    continue
-                got = _grasp_on_pair(poly, pair, com, margin, max_com_offset)
-                if isinstance(got, Rejection):
-                    rejected.append(got)
-                    continue
-                points, offset = got
-                if not model.convex and _crosses_concave_face(model, points):
-                    rejected.append(
-                        Rejection(
-                            pair,
-                            "outside_material",
-                            "the segment between the grasp points crosses a concave face",
-                        )
-                    )
-                    continue
-                normals = np.vstack([ni, nj])
-                out = assess(pair, points, normals, angle, offset, com, scale, weight, None)
-                if isinstance(out, Rejection):
-                    rejected.append(out)
-                else:
-                    candidates.append(out)
-    candidates.sort(key=lambda c: c.rank_key)
-    best = next((c for c in candidates if c.force_closure), None)
-    reason = "" if best is not None else _reason(parallel, limit, candidates, rejected)
-    return GraspPlan(
-        name,
-        best,
-        tuple(candidates),
-        reason,
-        tuple(rejected),
-        vec3(com),
-        weight,
-        params,
-        basis,
-        notes,
-        solid,
+            found.com,
+            mu=opts.mu,
+            pad_radius=opts.pad_radius,
+            cone_edges=opts.cone_edges,
+            torque_scale=found.scale,
+        ),
+        least_force=least_force(
+            points,
+            normals,
+            found.com,
+            found.weight,
+            mu=opts.mu,
+            pad_radius=opts.pad_radius,
+            cone_edges=opts.cone_edges,
+        ),
+        section=section,
     )
+
+
+def _on_sections(solid: SectionSolid, opts: _Options, mass: float | None, density: float) -> _Found:
+    """The strategy for layered models: antiparallel sides of each block's contour."""
+    found = _Found(
+        basis="sections",
+        com=np.asarray(solid.centroid, dtype=float),
+        weight=float(mass) if mass is not None else density * solid.volume,
+        scale=solid.torque_scale,
+        notes=(solid.note,),
+    )
+    for b in range(len(solid.blocks)):
+        for pair, angle, got in _section_pairs(
+            solid, b, found.com, opts.limit, opts.margin, opts.max_com_offset
+        ):
+            found.parallel += 1
+            if isinstance(got, Rejection):
+                found.rejected.append(got)
+                continue
+            points, normals, offset = got
+            found.add(_assess(found, opts, pair, points, normals, angle, offset, b))
+    return found
+
+
+def _on_polyhedron(
+    model: ObjectModel, poly: Polyhedron, opts: _Options, mass: float | None, density: float
+) -> _Found:
+    """The strategy for closed polyhedra: pairs of (nearly) parallel faces."""
+    notes: tuple[str, ...] = ()
+    if not model.convex:
+        notes = (
+            "the model is not convex and has no layer contours: its centre of mass is that "
+            "of the convex envelope, and grasp lines crossing a concave face are refused",
+        )
+    found = _Found(
+        basis="polyhedron",
+        com=np.asarray(poly.centroid, dtype=float),
+        weight=float(mass) if mass is not None else density * poly.volume,
+        scale=torque_scale(poly),
+        notes=notes,
+    )
+    table = _table_faces(model, poly)
+    nf = len(poly.faces)
+    for i in range(nf):
+        for j in range(i + 1, nf):
+            ni, nj = poly.normals[i], poly.normals[j]
+            angle = math.degrees(math.acos(float(np.clip(-np.dot(ni, nj), -1.0, 1.0))))
+            if angle > opts.limit + 1e-9:
+                continue
+            found.parallel += 1
+            pair = (i, j)
+            if i in table or j in table:
+                found.rejected.append(Rejection(pair, "table", "uses the table face (the support)"))
+                continue
+            got = _grasp_on_pair(poly, pair, found.com, opts.margin, opts.max_com_offset)
+            if isinstance(got, Rejection):
+                found.rejected.append(got)
+                continue
+            points, offset = got
+            if not model.convex and _crosses_concave_face(model, points):
+                found.rejected.append(
+                    Rejection(
+                        pair,
+                        "outside_material",
+                        "the segment between the grasp points crosses a concave face",
+                    )
+                )
+                continue
+            normals = np.vstack([ni, nj])
+            found.add(_assess(found, opts, pair, points, normals, angle, offset, None))
+    return found
 
 
 def _grasp_on_pair(
