@@ -29,11 +29,25 @@ from pydantic import BaseModel, ConfigDict, Field, ValidationError
 from tactile_kb.errors import RecordError
 from tactile_kb.types import Vec3
 
-__all__ = ["Contact", "ExplorationRecord", "Layer", "Plane", "Vec2", "Vec3"]
+__all__ = [
+    "READABLE_VERSIONS",
+    "RECORD_VERSION",
+    "Contact",
+    "ExplorationRecord",
+    "Layer",
+    "Plane",
+    "Vec2",
+    "Vec3",
+]
 
 Vec2 = tuple[float, float]
 
-RECORD_VERSION = 1
+RECORD_VERSION = 2
+"""The format written now. Version 2 (0.2) leaves :attr:`Layer.contour` empty: the model
+computes layer contours from the contacts. Records of version 1 (0.1) still load."""
+
+READABLE_VERSIONS = frozenset({1, RECORD_VERSION})
+"""Every record format :meth:`ExplorationRecord.from_json` reads."""
 
 
 class Plane(BaseModel):
@@ -86,7 +100,9 @@ class Layer(BaseModel):
     z: float
     path: list[Vec3] = Field(default_factory=list, description="tip-centre path in this layer")
     contour: list[Vec2] = Field(
-        default_factory=list, description="the object's cross-section polygon, counter-clockwise"
+        default_factory=list,
+        description="version 1 only: the cross-section polygon the explorer traced (the model "
+        "now computes it from the contacts, see tactile_kb.geometry.sections)",
     )
     closed: bool = Field(default=False, description="the contour returned to its first contact")
 
@@ -143,7 +159,7 @@ class ExplorationRecord(BaseModel):
             err = exc.errors(include_url=False)[0]
             where = ".".join(str(p) for p in err["loc"])
             raise RecordError(f"{file}: {where}: {err['msg']}") from None
-        if rec.version != RECORD_VERSION:
+        if rec.version not in READABLE_VERSIONS:
             raise RecordError(f"{file}: version {rec.version} is not supported")
         if not rec.finger or rec.tip_radius <= 0:
             raise RecordError(

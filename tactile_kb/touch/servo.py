@@ -857,20 +857,9 @@ class Controller:
     def _finish_layer(
         self, index: int, z: float, path: list[Vec3], first: int, closed: bool
     ) -> None:
-        contacts = [c for c in self.contacts[max(first, 0) :] if c.layer == index]
-        contour: list[tuple[float, float]] = []
-        try:
-            from tactile_kb.geometry.sections import contour_from_contacts
-        except ImportError:  # pragma: no cover - the geometry module is part of the package
-            contour_from_contacts = None  # type: ignore[assignment]
-        if contour_from_contacts is not None:
-            try:
-                contour = contour_from_contacts(contacts, self.rho, closed=closed)
-            except (UsageError, np.linalg.LinAlgError, ValueError):
-                contour = []
-        self.layers.append(
-            Layer(index=index, z=float(z), path=list(path), contour=contour, closed=closed)
-        )
+        # the contour polygon is geometry: the model computes it from the layer's contacts
+        del first
+        self.layers.append(Layer(index=index, z=float(z), path=list(path), closed=closed))
 
     def _top(self, contacts: list[Contact]) -> None:
         """Approach from above over the middle of the last contour; slide round a diamond on it.
