@@ -38,6 +38,7 @@ docs: $(STAMP)
 test: lint typecheck docs
 	$(BIN)/python -m pytest -q --ignore=docs/mujoco.md
 	$(MAKE) --no-print-directory $(PLUGIN_STAMP)
+	cd explorers/mujoco && ../../$(BIN)/lint-imports --no-cache
 	$(BIN)/python -m pytest -q explorers/mujoco/tests docs/mujoco.md
 
 gallery: $(STAMP)

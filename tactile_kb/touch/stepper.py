@@ -51,19 +51,24 @@ from scipy.spatial import cKDTree
 from tactile_kb.errors import UsageError
 from tactile_kb.touch.explorers import WorldExplorer
 from tactile_kb.touch.finger import Finger
-from tactile_kb.touch.world import CONTACT_TOL, Box, Event, Motion, MotionKind, Vec3, Workspace
+from tactile_kb.touch.world import (
+    BLOCK_TOL,
+    CONTACT_TOL,
+    Box,
+    Event,
+    Motion,
+    MotionKind,
+    Vec3,
+    Workspace,
+    default_workspace,
+)
 from tactile_kb.types import FloatArray
 
 __all__ = [
-    "BLOCK_TOL",
     "SAME_CONTACT_DEG",
     "StepperExplorer",
     "StepperWorld",
-    "default_workspace",
 ]
-
-BLOCK_TOL = 1e-9
-"""Metres: the tip is blocked where its distance to the mesh would drop below ρ − BLOCK_TOL."""
 
 _NUDGE = 1e-8  # how far past a change the motion stops, so the new state holds at the end
 _EPS_T = 1e-12
@@ -102,16 +107,6 @@ def _closest(
         edge_q = np.where(closer[:, None], q, edge_q)
     out: FloatArray = np.where(inside[:, None], proj, edge_q)
     return out, inside
-
-
-def default_workspace(bounds: FloatArray, radius: float) -> Workspace:
-    """A workspace around an object's ``bounds`` (2, 3): its size plus 0.15 m each side, floor ρ."""
-    lo, hi = np.asarray(bounds[0], float), np.asarray(bounds[1], float)
-    pad = 0.15
-    return Workspace(
-        lo=(float(lo[0] - pad), float(lo[1] - pad), float(radius)),
-        hi=(float(hi[0] + pad), float(hi[1] + pad), float(hi[2] + pad)),
-    )
 
 
 def _v3(a: Sequence[float] | FloatArray) -> Vec3:

@@ -58,10 +58,13 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Literal, Protocol, runtime_checkable
 
+import numpy as np
+
 from tactile_kb.touch.finger import Finger
-from tactile_kb.types import Vec3
+from tactile_kb.types import FloatArray, Vec3
 
 __all__ = [
+    "BLOCK_TOL",
     "CONTACT_TOL",
     "Box",
     "Event",
@@ -70,6 +73,7 @@ __all__ = [
     "Vec3",
     "Workspace",
     "World",
+    "default_workspace",
 ]
 
 
@@ -80,6 +84,10 @@ MotionKind = Literal["move", "slide"]
 
 CONTACT_TOL = 1e-7
 """Metres: the tip touches the object when its centre is within ρ + CONTACT_TOL of it."""
+
+BLOCK_TOL = 1e-9
+"""Metres: a world blocks the tip where its distance to the object would drop below
+ρ − BLOCK_TOL."""
 
 
 @dataclass(frozen=True)
@@ -236,3 +244,13 @@ class World(Protocol):
         ``"release"`` of ``sensor`` at distance 0.
         """
         ...
+
+
+def default_workspace(bounds: FloatArray, radius: float) -> Workspace:
+    """A workspace around an object's ``bounds`` (2, 3): its size plus 0.15 m each side, floor ρ."""
+    lo, hi = np.asarray(bounds[0], float), np.asarray(bounds[1], float)
+    pad = 0.15
+    return Workspace(
+        lo=(float(lo[0] - pad), float(lo[1] - pad), float(radius)),
+        hi=(float(hi[0] + pad), float(hi[1] + pad), float(hi[2] + pad)),
+    )

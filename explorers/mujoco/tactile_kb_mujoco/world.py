@@ -24,7 +24,7 @@ as the analytic world keeps the tip at distance ρ.
 Contacts are read from MuJoCo's contact list: the tip is *in contact* with a surface when its
 distance is below the tip's margin (:class:`~tactile_kb_mujoco.scene.SceneOptions`), which is
 :data:`tactile_kb.touch.world.CONTACT_TOL`. A motion is *blocked* where the tip would penetrate
-the object by more than :data:`tactile_kb.touch.stepper.BLOCK_TOL` without a change of the fired set
+the object by more than :data:`tactile_kb.touch.world.BLOCK_TOL` without a change of the fired set
 (a blind contact), as in the analytic world.
 
 Examples
@@ -51,8 +51,16 @@ from numpy.typing import NDArray
 
 from tactile_kb.errors import ObjectError, UsageError
 from tactile_kb.touch.finger import Finger
-from tactile_kb.touch.stepper import BLOCK_TOL, default_workspace
-from tactile_kb.touch.world import Box, Event, Motion, MotionKind, Vec3, Workspace
+from tactile_kb.touch.world import (
+    BLOCK_TOL,
+    Box,
+    Event,
+    Motion,
+    MotionKind,
+    Vec3,
+    Workspace,
+    default_workspace,
+)
 from tactile_kb_mujoco.parts import MAX_HULL_VERTICES, ConvexPart, convex_parts
 from tactile_kb_mujoco.scene import SceneOptions, scene_xml
 
@@ -101,7 +109,7 @@ class MujocoWorld:
         What error messages call the object.
     workspace
         The motors' range (default: the analytic world's,
-        :func:`tactile_kb.touch.stepper.default_workspace`).
+        :func:`tactile_kb.touch.world.default_workspace`).
     hint_margin
         How much the :attr:`hint` box exceeds the object's bounds, metres (as the analytic
         world).
@@ -334,7 +342,7 @@ class MujocoWorld:
     def _event(self, ref: _Probe, probe: _Probe, *, physical: bool = False) -> bool:
         """Whether a motion must stop at ``probe``: the fired set differs from ``ref``'s, or
         (on the commanded line) the tip would penetrate the object by more than
-        :data:`tactile_kb.touch.stepper.BLOCK_TOL`, as in the analytic world.
+        :data:`tactile_kb.touch.world.BLOCK_TOL`, as in the analytic world.
 
         ``physical`` samples (the finger where the dynamics put it) are pressed into the
         surface on purpose during a slide: only a change of the fired set counts for them.
