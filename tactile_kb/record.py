@@ -21,10 +21,10 @@ from __future__ import annotations
 import json
 import math
 from pathlib import Path
-from typing import Literal
+from typing import Any, Literal
 
 import numpy as np
-from pydantic import BaseModel, ConfigDict, Field, ValidationError
+from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_validator
 
 from tactile_kb.errors import RecordError
 from tactile_kb.types import Vec3
@@ -119,6 +119,11 @@ class ExplorationRecord(BaseModel):
     tip_radius: float = Field(default=0.0, description="ρ, metres")
     sensor_directions: list[Vec3] = Field(default_factory=list)
     seed: int | None = None
+    noise: float = Field(
+        default=0.0,
+        ge=0.0,
+        description="σ of the encoder noise the exploration ran with, metres (0: exact contacts)",
+    )
     params: dict[str, float] = Field(default_factory=dict)
     contacts: list[Contact] = Field(default_factory=list)
     path: list[Vec3] = Field(default_factory=list, description="the tip-centre polyline")
@@ -126,6 +131,16 @@ class ExplorationRecord(BaseModel):
     contacts_per_phase: dict[str, int] = Field(default_factory=dict)
     complete: bool = Field(default=True, description="False when lazy exploration stopped early")
     notes: list[str] = Field(default_factory=list)
+
+    @model_validator(mode="before")
+    @classmethod
+    def _noise_from_version_1(cls, data: Any) -> Any:
+        """Version 1 kept σ in ``params["noise"]``; it is a field of its own now."""
+        if isinstance(data, dict) and "noise" not in data and isinstance(data.get("params"), dict):
+            params = dict(data["params"])
+            if "noise" in params:
+                data = {**data, "noise": params.pop("noise"), "params": params}
+        return data
 
     @property
     def touches(self) -> int:

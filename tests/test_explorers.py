@@ -94,5 +94,5 @@ def test_record_names_and_parameters() -> None:
     assert rec.explorer == "stepper"
     assert rec.finger == "4"
     assert rec.seed == 11
-    assert rec.params["noise"] == 0.0002
+    assert rec.noise == 0.0002
     assert rec.params["l2"] == ServoParams().l2

@@ -56,3 +56,15 @@ def test_new_records_are_version_2_and_unknown_versions_are_refused() -> None:
     with pytest.raises(RecordError, match="version 99 is not supported"):
         ExplorationRecord.from_json(future, file="future.json")
     assert np.isfinite(rec.path_length)
+
+
+def test_the_noise_sigma_is_a_field_and_version_1_params_migrate() -> None:
+    v1 = ExplorationRecord.load(DATA / "v1-box-33.json")
+    assert v1.noise == 0.0
+    assert "noise" not in v1.params
+    text = (DATA / "v1-box-33.json").read_text(encoding="utf-8")
+    noisy = text.replace('"noise": 0.0', '"noise": 0.0005', 1)
+    assert noisy != text
+    rec = ExplorationRecord.from_json(noisy)
+    assert rec.noise == 0.0005
+    assert "noise" not in rec.params

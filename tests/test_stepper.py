@@ -162,30 +162,6 @@ def test_bad_arguments() -> None:
         world.move((0.0, 0.0, 0.3), (1.0, 0.0, 0.0), -1.0)
     with pytest.raises(UsageError, match="no sensor 9"):
         world.slide((0.0, 0.0, 0.3), (1.0, 0.0, 0.0), 0.1, 9)
-    with pytest.raises(UsageError, match="noise"):
-        StepperWorld(cube(), builtin_finger("4"), noise=-1.0)
-
-
-def test_noise_only_moves_the_measurement_and_is_seeded() -> None:
-    a = StepperWorld(cube(), builtin_finger("4"), noise=0.001, seed=5)
-    b = StepperWorld(cube(), builtin_finger("4"), noise=0.001, seed=5)
-    ma = a.move((-0.2, 0.0, 0.05), (1.0, 0.0, 0.0), 0.3)
-    mb = b.move((-0.2, 0.0, 0.05), (1.0, 0.0, 0.0), 0.3)
-    assert ma == mb
-    assert ma.end[0] == pytest.approx(-0.055, abs=1e-6)
-    assert ma.measured != ma.end
-    assert np.linalg.norm(np.subtract(ma.measured, ma.end)) < 0.01
-
-
-def test_dropout_and_false_fires() -> None:
-    dead = StepperWorld(cube(), builtin_finger("4"), dropout=1.0, seed=0)
-    m = dead.move((-0.2, 0.0, 0.05), (1.0, 0.0, 0.0), 0.3)
-    assert m.event == "blocked"
-    assert m.fired == ()
-    ghost = StepperWorld(cube(), builtin_finger("4"), false_fire=1.0, seed=0)
-    g = ghost.move((-0.2, 0.0, 0.05), (1.0, 0.0, 0.0), 0.3)
-    assert g.event == "touch"
-    assert g.end[0] < -0.055 + 1e-9  # somewhere before the real face
 
 
 def test_the_mesh_is_not_modified() -> None:

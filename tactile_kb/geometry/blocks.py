@@ -40,16 +40,19 @@ SECTION_TOL = 0.001
 
 
 def _polygon_moments(polygon: FloatArray) -> tuple[float, FloatArray, float]:
-    """Area, centroid and E|p − c|² (m²) of a simple polygon given counter-clockwise."""
+    """Area, centroid and E|p − c|² (m²) of a simple polygon given counter-clockwise.
+
+    Area and centroid are shapely's; shapely has no second moment, so ∫|p|² dA is summed over
+    the polygon's edges (Green's theorem).
+    """
+    shape = shapely.Polygon(polygon)
+    area = float(shape.area)
+    c = np.array([shape.centroid.x, shape.centroid.y])
     x, y = polygon[:, 0], polygon[:, 1]
     xn, yn = np.roll(x, -1), np.roll(y, -1)
     cross = x * yn - xn * y
-    area = 0.5 * float(cross.sum())
-    cx = float(((x + xn) * cross).sum()) / (6.0 * area)
-    cy = float(((y + yn) * cross).sum()) / (6.0 * area)
-    ixx = float(((y * y + y * yn + yn * yn) * cross).sum()) / 12.0  # ∫ y² dA
-    iyy = float(((x * x + x * xn + xn * xn) * cross).sum()) / 12.0  # ∫ x² dA
-    return area, np.array([cx, cy]), (ixx + iyy) / area - (cx * cx + cy * cy)
+    polar = float(((x * x + x * xn + xn * xn + y * y + y * yn + yn * yn) * cross).sum()) / 12.0
+    return area, c, polar / area - float(c @ c)
 
 
 @dataclass(frozen=True, eq=False)

@@ -186,7 +186,7 @@ def build_model(
         Passed to :func:`tactile_kb.geometry.planes.merge_planes`.
     merge_fraction
         Passed to :func:`tactile_kb.geometry.polyhedron.polyhedron_from_planes`. When
-        ``record.params["noise"]`` is positive and this is the default, vertices merge within
+        ``record.noise`` is positive and this is the default, vertices merge within
         :data:`NOISY_MERGE_FRACTION` × the touched points' smallest extent if that is larger
         (``options["merge_tol"]``).
     include_table
@@ -203,7 +203,7 @@ def build_model(
         them by a horizontal face through the highest touched point and record its height
         in ``assumed_top``.
     collapse_sigmas
-        When ``record.params["noise"]`` is positive, polyhedron edges shorter than this many
+        When ``record.noise`` is positive, polyhedron edges shorter than this many
         σ of their length (from the faces' uncertainties) are collapsed into a vertex
         (:func:`tactile_kb.geometry.polyhedron.collapse_short_edges`); None never collapses.
 
@@ -224,7 +224,7 @@ def build_model(
         split_tol=split_tol,
         include_table=include_table,
     )
-    noise = float(record.params.get("noise", 0.0))
+    noise = record.noise
     tol = (
         support_tol if support_tol is not None else max(split_tol or DEFAULT_SPLIT_TOL, 6.0 * noise)
     )

@@ -72,7 +72,7 @@ DEFAULT_CUT_DEG = 15.0
 DEFAULT_SPLIT_TOL = 0.0025
 """Largest distance (m) of a tip centre from its face's fitted plane before the face is split
 (and the largest for two faces to be merged as coplanar). 2.5 mm is five times the 0.5 mm
-position noise; records that declare a larger ``params["noise"]`` use six times that."""
+position noise; records that declare a larger ``noise`` use six times that."""
 
 DEFAULT_SPAN = 0.002
 """Centres span a face when their spread across the fitted line is at least this (m, RMS)."""
@@ -421,7 +421,7 @@ def merge_plane_arrays(
     cut = spacing_cut if cut_deg is None else float(cut_deg)
     if not 0.0 < cut < 90.0:
         raise UsageError(f"cut_deg must lie in (0, 90), got {cut_deg}")
-    noise = float(record.params.get("noise", 0.0))
+    noise = record.noise
     tol = split_tol if split_tol is not None else max(DEFAULT_SPLIT_TOL, 6.0 * noise)
     faces: list[Face] = []
     if len(chosen):

@@ -35,6 +35,8 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy.optimize import linprog
+from scipy.sparse import csr_array
+from scipy.sparse.csgraph import connected_components
 from scipy.spatial import ConvexHull, HalfspaceIntersection, QhullError
 
 from tactile_kb.errors import GeometryError, OpenModelError, UsageError
@@ -276,24 +278,8 @@ def _pairs(m: int) -> tuple[NDArray[np.intp], NDArray[np.intp]]:
 
 def _components(close: NDArray[np.bool_]) -> NDArray[np.intp]:
     """Connected-component labels of a symmetric adjacency matrix, numbered in the order of
-    each component's smallest member (as ``scipy.sparse.csgraph.connected_components``)."""
-    pairs = np.nonzero(np.triu(close, 1))
-    if len(pairs[0]) == 0:  # every vertex on its own
-        return np.arange(len(close), dtype=np.intp)
-    parent = list(range(len(close)))
-
-    def root(a: int) -> int:
-        while parent[a] != a:
-            parent[a] = parent[parent[a]]
-            a = parent[a]
-        return a
-
-    for a, b in zip(*pairs, strict=True):
-        ra, rb = root(int(a)), root(int(b))
-        if ra != rb:  # the smaller index stays the root
-            parent[max(ra, rb)] = min(ra, rb)
-    roots = np.asarray([root(a) for a in range(len(close))], dtype=np.intp)
-    _, labels = np.unique(roots, return_inverse=True)
+    each component's smallest member."""
+    _, labels = connected_components(csr_array(close), directed=False)
     return np.asarray(labels, dtype=np.intp).reshape(-1)
 
 

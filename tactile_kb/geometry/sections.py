@@ -25,6 +25,8 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
+import shapely
+import shapely.geometry.polygon
 
 from tactile_kb.errors import UsageError
 from tactile_kb.geometry.polyhedron import Polyhedron
@@ -57,8 +59,7 @@ def polygon_area(polygon: FloatArray | Sequence[Sequence[float]]) -> float:
     p = np.asarray(polygon, dtype=float).reshape(-1, 2)
     if len(p) < 3:
         return 0.0
-    x, y = p[:, 0], p[:, 1]
-    return 0.5 * float(np.dot(x, np.roll(y, -1)) - np.dot(np.roll(x, -1), y))
+    return float(shapely.geometry.polygon.signed_area(shapely.LinearRing(p)))
 
 
 def cross_section(poly: Polyhedron, z: float) -> FloatArray:

@@ -43,6 +43,7 @@ from tactile_kb.objects import ObjectLike, check_thickness, load_object, object_
 from tactile_kb.plugins import Registry
 from tactile_kb.record import ExplorationRecord
 from tactile_kb.touch.finger import Finger, load_finger
+from tactile_kb.touch.sensors import FaultySensors, check_fault_rates
 
 if TYPE_CHECKING:
     import trimesh
@@ -160,21 +161,27 @@ class ServoSession:
 class WorldExplorer(abc.ABC):
     """Base of explorers that drive the shared servo controller in a :class:`~tactile_kb.touch.world.World`.
 
-    Subclasses set :attr:`name` and implement :meth:`make_world`. ``params`` are the servo
-    parameters (:class:`tactile_kb.touch.servo.ServoParams`, default when ``None``); like a
-    scikit-learn estimator, ``__init__`` only stores them.
+    Subclasses set :attr:`name` and implement :meth:`make_world`, which returns an *ideal*
+    world: the session wraps it in :class:`~tactile_kb.touch.sensors.FaultySensors`, which adds
+    the encoder noise (``noise``, given per exploration) and the sensor faults (``dropout``,
+    ``false_fire``, given here), the same in every world. ``params`` are the servo parameters
+    (:class:`tactile_kb.touch.servo.ServoParams`, default when ``None``); like a scikit-learn
+    estimator, ``__init__`` only stores them.
     """
 
     name: str = ""
 
-    def __init__(self, params: ServoParams | None = None) -> None:
+    def __init__(
+        self, params: ServoParams | None = None, *, dropout: float = 0.0, false_fire: float = 0.0
+    ) -> None:
         self.params = params
+        self.dropout = dropout
+        self.false_fire = false_fire
 
     @abc.abstractmethod
-    def make_world(
-        self, mesh: trimesh.Trimesh, finger: Finger, *, seed: int | None, noise: float
-    ) -> World:
-        """The world in which ``mesh`` (resting on z = 0, a private copy) is sensed by ``finger``."""
+    def make_world(self, mesh: trimesh.Trimesh, finger: Finger, *, seed: int | None) -> World:
+        """The ideal world in which ``mesh`` (resting on z = 0, a private copy) is sensed by
+        ``finger``; ``seed`` is for a world's own randomness, if it has any."""
 
     def session(
         self,
@@ -187,21 +194,26 @@ class WorldExplorer(abc.ABC):
         """Start a lazy exploration of ``obj`` (nothing is explored before :meth:`ServoSession.advance`)."""
         from tactile_kb.touch.servo import Controller, ServoParams
 
-        if noise < 0:
-            raise UsageError(f"noise must be ≥ 0 metres, got {noise}")
+        check_fault_rates(noise=noise, dropout=self.dropout, false_fire=self.false_fire)
         if seed is not None and (not isinstance(seed, int) or seed < 0):
             raise UsageError(f"seed must be a whole number ≥ 0 or None, got {seed!r}")
         mesh = load_object(obj)
         f = load_finger(finger)
         check_thickness(mesh, f.radius, name=object_name(obj))
-        world = self.make_world(mesh, f, seed=seed, noise=noise)
+        world = FaultySensors(
+            self.make_world(mesh, f, seed=seed),
+            noise=noise,
+            dropout=self.dropout,
+            false_fire=self.false_fire,
+            seed=seed,
+        )
         controller = Controller(
             world,
             self.params or ServoParams(),
             explorer=self.name,
             object_name=object_name(obj),
             seed=seed,
-            extra_params={"noise": float(noise)},
+            noise=float(noise),
         )
         return ServoSession(controller)
 
@@ -217,7 +229,12 @@ class WorldExplorer(abc.ABC):
         return self.session(obj, finger=finger, seed=seed, noise=noise).advance("complete")
 
     def __repr__(self) -> str:
-        return f"{type(self).__name__}(params={self.params!r})"
+        faults = "".join(
+            f", {k}={v!r}"
+            for k, v in (("dropout", self.dropout), ("false_fire", self.false_fire))
+            if v
+        )
+        return f"{type(self).__name__}(params={self.params!r}{faults})"
 
 
 def _is_explorer(obj: Any) -> bool:

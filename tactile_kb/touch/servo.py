@@ -188,8 +188,8 @@ class Controller:
         The world to explore (any implementation of the protocol).
     params
         The servo parameters.
-    explorer, object_name, seed, extra_params
-        Copied into the record.
+    explorer, object_name, seed, noise, extra_params
+        Copied into the record (``noise``: σ of the encoder noise of the world's sensors).
     """
 
     def __init__(
@@ -200,6 +200,7 @@ class Controller:
         explorer: str = "",
         object_name: str = "",
         seed: int | None = None,
+        noise: float = 0.0,
         extra_params: dict[str, float] | None = None,
     ) -> None:
         self.world = world
@@ -207,6 +208,7 @@ class Controller:
         self.explorer = explorer
         self.object_name = object_name
         self.seed = seed
+        self.noise = float(noise)
         self.extra_params = dict(extra_params or {})
         self.finger = world.finger
         self.rho = float(self.finger.radius)
@@ -354,6 +356,7 @@ class Controller:
             tip_radius=self.rho,
             sensor_directions=list(self.finger.directions),
             seed=self.seed,
+            noise=self.noise,
             params=params,
             contacts=list(self.contacts),
             path=list(self.path),

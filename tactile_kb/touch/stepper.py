@@ -19,11 +19,9 @@ surface the tip stays at constant distance from it, so the same interval algebra
 the face ends (a ``"release"`` at a convex edge) or where another face closes a sensor (a
 ``"touch"`` at a concave corner).
 
-Options: ``noise`` (σ, metres, Gaussian noise on the measured tip position of every motion),
-``dropout`` (probability that a closing sensor's signal is lost: the finger stops blind,
-``"blocked"``, or follows part of the sensors that closed; the servo recovers it by reading
-the sensors again at rest), ``false_fire`` (probability per motion that a random sensor fires spuriously
-somewhere along it) and ``seed``; the same seed and the same calls give the same answers.
+The world is ideal: it reports true positions and the sensors that really close. Encoder
+noise, drop-outs and false fires are added by :class:`tactile_kb.touch.sensors.FaultySensors`,
+the same for every world (:class:`StepperExplorer` wraps its world in it).
 
 Examples
 --------
@@ -41,7 +39,6 @@ from __future__ import annotations
 
 import math
 from collections.abc import Iterator, Sequence
-from typing import Any
 
 import numpy as np
 import trimesh
@@ -124,15 +121,6 @@ class StepperWorld:
         The finger layout; its ``radius`` is ρ.
     workspace
         Where the tip centre may go; default :func:`default_workspace` of the mesh bounds.
-    noise
-        σ of the Gaussian noise added to the measured position of every motion (metres).
-    dropout
-        Probability that the sensors closing at a touch are not reported (the finger stops
-        blind: ``"blocked"``).
-    false_fire
-        Probability per motion that a random OFF sensor fires spuriously along it.
-    seed
-        Seed of the world's random generator (noise, drop-outs, false fires).
     hint_margin
         How much the :attr:`hint` box exceeds the object's bounds (metres).
     """
@@ -143,14 +131,8 @@ class StepperWorld:
         finger: Finger,
         *,
         workspace: Workspace | None = None,
-        noise: float = 0.0,
-        dropout: float = 0.0,
-        false_fire: float = 0.0,
-        seed: int | None = None,
         hint_margin: float = 0.005,
     ) -> None:
-        if noise < 0 or not 0 <= dropout <= 1 or not 0 <= false_fire <= 1:
-            raise UsageError("noise must be ≥ 0 and dropout, false_fire probabilities in [0, 1]")
         self._finger = finger
         self._rho = float(finger.radius)
         self._dirs = finger.matrix
@@ -184,10 +166,6 @@ class StepperWorld:
         bounds = np.array(mesh.bounds, dtype=float)
         self._workspace = workspace or default_workspace(bounds, self._rho)
         self._hint = Box(lo=_v3(bounds[0] - hint_margin), hi=_v3(bounds[1] + hint_margin))
-        self.noise = float(noise)
-        self.dropout = float(dropout)
-        self.false_fire = float(false_fire)
-        self._rng = np.random.default_rng(seed)
 
     # protocol attributes ------------------------------------------------------------------------
     @property
@@ -376,7 +354,7 @@ class StepperWorld:
                 fired=fired,
                 closed=(),
                 opened=(sensor,),
-                measured=self._measure(a),
+                measured=_v3(a),
             )
         n = -contacts[int(np.argmax(cos))]
         t = np.array([-n[1], n[0], 0.0])
@@ -392,11 +370,6 @@ class StepperWorld:
             if float(t @ cmd) < 0:
                 t = -t
         return self._run("slide", _v3(a), _v3(t), length)
-
-    def _measure(self, p: FloatArray) -> Vec3:
-        if self.noise > 0:
-            return _v3(p + self._rng.normal(0.0, self.noise, 3))
-        return _v3(p)
 
     def _changes(
         self, a: FloatArray, u: FloatArray, marks: FloatArray, fired0: tuple[int, ...]
@@ -465,23 +438,8 @@ class StepperWorld:
                 event = "blocked"
             elif room < length:
                 event = "limit"
-        # spurious fire somewhere before the real event
-        if self.false_fire > 0 and self._rng.random() < self.false_fire and stop > 0:
-            off = [i for i in range(len(self._dirs)) if i not in fired0]
-            if off:
-                k = int(self._rng.choice(off))
-                stop = float(self._rng.uniform(0.0, stop))
-                fired = tuple(sorted(set(self._fired(a + stop * u)) | {k}))
-                event = "touch"
         closed = tuple(sorted(set(fired) - set(fired0)))
         opened = tuple(sorted(set(fired0) - set(fired)))
-        if event == "touch" and self.dropout > 0:
-            lost = {s for s in closed if self._rng.random() < self.dropout}
-            if lost:
-                fired = tuple(s for s in fired if s not in lost)
-                closed = tuple(s for s in closed if s not in lost)
-                if not closed:
-                    event = "blocked"
         end = a + stop * u
         return Motion(
             kind=kind,
@@ -494,7 +452,7 @@ class StepperWorld:
             fired=fired,
             closed=closed,
             opened=opened,
-            measured=self._measure(end),
+            measured=_v3(end),
         )
 
 
@@ -506,27 +464,15 @@ class StepperExplorer(WorldExplorer):
     params
         Servo parameters (:class:`tactile_kb.touch.servo.ServoParams`); defaults suit 2–30 cm objects.
     dropout, false_fire
-        Sensor fault probabilities passed to the world (see :class:`StepperWorld`).
+        Sensor fault probabilities (see :class:`tactile_kb.touch.sensors.FaultySensors`).
     """
 
     name = "stepper"
 
-    def __init__(
-        self, params: Any = None, *, dropout: float = 0.0, false_fire: float = 0.0
-    ) -> None:
-        super().__init__(params)
-        self.dropout = dropout
-        self.false_fire = false_fire
-
     def make_world(
-        self, mesh: trimesh.Trimesh, finger: Finger, *, seed: int | None, noise: float
+        self, mesh: trimesh.Trimesh, finger: Finger, *, seed: int | None
     ) -> StepperWorld:
-        """The analytic world of ``mesh`` sensed with ``finger``."""
-        return StepperWorld(
-            mesh,
-            finger,
-            noise=noise,
-            dropout=self.dropout,
-            false_fire=self.false_fire,
-            seed=seed,
-        )
+        """The analytic world of ``mesh`` sensed with ``finger`` (ideal; faults are added by
+        :class:`~tactile_kb.touch.sensors.FaultySensors`)."""
+        del seed  # the analytic world draws no random numbers
+        return StepperWorld(mesh, finger)

@@ -45,6 +45,9 @@ class MujocoExplorer(WorldExplorer):
         Touch-sensor force above which a sensor is ON, newtons.
     options
         The scene's physical parameters (:class:`~tactile_kb_mujoco.scene.SceneOptions`).
+    dropout, false_fire
+        Sensor fault probabilities, added to the simulation by
+        :class:`tactile_kb.touch.sensors.FaultySensors` as in every world.
     """
 
     name = "mujoco"
@@ -57,22 +60,22 @@ class MujocoExplorer(WorldExplorer):
         press: float = 1e-4,
         threshold: float = 0.0,
         options: SceneOptions | None = None,
+        dropout: float = 0.0,
+        false_fire: float = 0.0,
     ) -> None:
-        super().__init__(params)
+        super().__init__(params, dropout=dropout, false_fire=false_fire)
         self.speed = speed
         self.press = press
         self.threshold = threshold
         self.options = options
 
-    def make_world(
-        self, mesh: trimesh.Trimesh, finger: Finger, *, seed: int | None, noise: float
-    ) -> MujocoWorld:
-        """The MuJoCo world of ``mesh`` sensed with ``finger``."""
+    def make_world(self, mesh: trimesh.Trimesh, finger: Finger, *, seed: int | None) -> MujocoWorld:
+        """The MuJoCo world of ``mesh`` sensed with ``finger`` (ideal; the session adds the
+        sensor faults and the encoder noise)."""
+        del seed  # the simulation is deterministic
         return MujocoWorld(
             mesh,
             finger,
-            noise=noise,
-            seed=seed,
             speed=self.speed,
             press=self.press,
             threshold=self.threshold,

@@ -113,10 +113,6 @@ class MujocoWorld:
     hint_margin
         How much the :attr:`hint` box exceeds the object's bounds, metres (as the analytic
         world).
-    noise
-        Standard deviation σ of the encoders' position noise on :attr:`Motion.measured`, m.
-    seed
-        Seed of the world's random generator (the noise).
     speed
         Motor speed along a motion, m/s.
     press
@@ -149,8 +145,6 @@ class MujocoWorld:
         name: str = "object",
         workspace: Workspace | None = None,
         hint_margin: float = 0.005,
-        noise: float = 0.0,
-        seed: int | None = None,
         speed: float = 0.25,
         press: float = 1e-4,
         threshold: float = 0.0,
@@ -162,11 +156,10 @@ class MujocoWorld:
         parts: Sequence[ConvexPart] | None = None,
         max_hull_vertices: int = MAX_HULL_VERTICES,
     ) -> None:
-        if noise < 0 or speed <= 0 or press < 0 or resolution <= 0:
-            raise UsageError("noise and press must be ≥ 0, speed and resolution > 0")
+        if speed <= 0 or press < 0 or resolution <= 0:
+            raise UsageError("press must be ≥ 0, speed and resolution > 0")
         self._finger = finger
         self.name = name
-        self.noise = float(noise)
         self.speed = float(speed)
         self.press = float(press)
         self.threshold = float(threshold)
@@ -183,7 +176,6 @@ class MujocoWorld:
         b = np.asarray(mesh.bounds, dtype=float)
         self._workspace = workspace or default_workspace(b, finger.radius)
         self._hint = Box(lo=_vec(b[0] - hint_margin), hi=_vec(b[1] + hint_margin))
-        self._rng = np.random.default_rng(seed)
         start = self._workspace.hi
         self.xml = scene_xml(finger, self.parts, options=self.options, start=start)
         try:
@@ -256,7 +248,7 @@ class MujocoWorld:
                 fired=ref.fired,
                 closed=(),
                 opened=(sensor,),
-                measured=self._measure(p0),
+                measured=_vec(p0),
             )
         n = self._snap(surface)
         # Pressed on the surface: the commanded line runs just inside the contact band.
@@ -445,11 +437,6 @@ class MujocoWorld:
         self._place(end)
         return self._motion(kind, p0, u, end, event, ref, final.fired)
 
-    def _measure(self, p: FloatArray) -> Vec3:
-        if self.noise > 0:
-            return _vec(p + self._rng.normal(0.0, self.noise, 3))
-        return _vec(p)
-
     def _motion(
         self,
         kind: MotionKind,
@@ -472,5 +459,5 @@ class MujocoWorld:
             fired=fired,
             closed=tuple(sorted(set(fired) - set(fired_start))),
             opened=tuple(sorted(set(fired_start) - set(fired))),
-            measured=self._measure(end),
+            measured=_vec(end),
         )

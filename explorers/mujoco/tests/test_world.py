@@ -14,6 +14,7 @@ from tactile_kb_mujoco.world import MujocoWorld
 from tactile_kb import solids
 from tactile_kb.errors import ObjectError, UsageError
 from tactile_kb.touch.finger import builtin_finger
+from tactile_kb.touch.sensors import FaultySensors
 from tactile_kb.touch.stepper import StepperWorld
 from tactile_kb.touch.world import CONTACT_TOL, World
 
@@ -132,8 +133,8 @@ def test_blind_contact_is_blocked():
 
 
 def test_noise_is_seeded():
-    a = MujocoWorld(CUBE, F4, noise=0.001, seed=5)
-    b = MujocoWorld(CUBE, F4, noise=0.001, seed=5)
+    a = FaultySensors(MujocoWorld(CUBE, F4), noise=0.001, seed=5)
+    b = FaultySensors(MujocoWorld(CUBE, F4), noise=0.001, seed=5)
     ma = a.move((-0.06, 0.0, 0.02), (1.0, 0.0, 0.0), 0.1)
     mb = b.move((-0.06, 0.0, 0.02), (1.0, 0.0, 0.0), 0.1)
     assert ma == mb
