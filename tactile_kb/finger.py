@@ -330,6 +330,8 @@ def load_finger(finger: Finger | str | Path, *, radius: float | None = None) -> 
         out = builtin_finger(finger)
     else:
         path = Path(finger)
+        if not str(finger):
+            raise UsageError("no finger given (--finger ''): give 4, 33 or a YAML layout file")
         if not path.exists():
             known = ", ".join(sorted(BUILTIN_LAYOUTS))
             raise UsageError(

@@ -79,7 +79,7 @@ def build_gallery(
     from tactile_kb.grasp import plan_grasp
     from tactile_kb.model import build_model
     from tactile_kb.pipeline import classify, knowledge_base
-    from tactile_kb.plot import plot_classification, plot_exploration, plot_tree
+    from tactile_kb.plot import plot_classification, plot_exploration, plot_tree, save_figure
     from tactile_kb.solids import fig5_objects
 
     directory = Path(out)
@@ -95,7 +95,7 @@ def build_gallery(
         target = directory / f"{name.lower()}.png"
         fig = plot_classification(result, None, mesh=mesh, grasp=plan, size=size, dpi=dpi)
         fig.suptitle(f"{name}: {result.decision.answer}", fontsize=8)
-        fig.savefig(target, format="png", dpi=dpi)
+        save_figure(fig, target, dpi=dpi)
         written.append(target)
         if name == "CUBE1":
             cube_decision = result.decision

@@ -85,22 +85,31 @@ class Classification:
         return f"{self.decision.answer} ({extra})" if extra else self.decision.answer
 
     def summary(self) -> dict[str, Any]:
-        """The JSON line of ``tactile-kb classify --json``."""
+        """The JSON object of ``tactile-kb classify --json`` (one line per object).
+
+        Its schema is ``tactile_kb/schemas/classification.schema.json``: ``answer`` is the
+        bare answer and ``report`` the answer with the measures its class reports (as the
+        text output prints it); ``touches`` counts sensor OFF→ON events and ``contacts``
+        every contact recorded (touches and slides).
+        """
         return {
             "object": self.object,
             "answer": self.decision.answer,
+            "report": self.answer,
             "label": self.decision.label,
             "bits": self.decision.bits,
             "propositions": dict(self.decision.values),
-            "contacts": self.record.touches,
+            "touches": self.record.touches,
+            "contacts": len(self.record.contacts),
             "planes": self.planes,
             "path_length": round(self.record.path_length, 6),
             "seconds": round(self.seconds, 4),
             "phase": self.decision.phase,
-            "contacts_per_phase": dict(self.contacts_per_phase),
+            "touches_per_phase": dict(self.contacts_per_phase),
             "explanation": self.decision.explanation,
             "reported": self.reported,
             "measures": self.measures,
+            "notes": list(self.record.notes),
         }
 
 

@@ -43,7 +43,8 @@ from mpl_toolkits.mplot3d.art3d import (  # type: ignore[import-untyped]
     Poly3DCollection,
 )
 
-from tactile_kb.errors import UsageError
+from tactile_kb.errors import OutputError, UsageError
+from tactile_kb.files import atomic_write
 from tactile_kb.grasp import GraspPlan, SectionSolid
 from tactile_kb.model import ObjectModel, build_model
 from tactile_kb.record import ExplorationRecord
@@ -98,10 +99,10 @@ def save_figure(fig: Figure, path: str | Path, *, dpi: float | None = None) -> P
         raise UsageError(f"{p}: cannot write a picture with suffix {p.suffix!r} (use {known})")
     if not p.parent.exists():
         raise UsageError(f"{p}: the directory {p.parent} does not exist")
-    try:
-        fig.savefig(p, format=fmt, dpi=dpi if dpi is not None else fig.dpi)
+    try:  # atomically: a failure or a kill leaves any earlier picture at ``p`` as it was
+        atomic_write(p, lambda f: fig.savefig(f, format=fmt, dpi=dpi or fig.dpi))
     except OSError as exc:
-        raise UsageError(f"{p}: cannot write the picture: {exc.strerror or exc}") from None
+        raise OutputError(f"{p}: cannot write the picture: {exc.strerror or exc}") from None
     return p
 
 

@@ -57,10 +57,11 @@ def test_validate_lists_every_error_and_exits_1(
 
 
 def test_validate_missing_file(capsys: pytest.CaptureFixture[str], tmp_path: Path) -> None:
-    assert main(["validate", str(tmp_path / "nope.yaml")]) == 1
+    # a path that names nothing is a usage error (docs/cli.md), as in compile and query
+    assert main(["validate", str(tmp_path / "nope.yaml")]) == 2
     err = capsys.readouterr().err
     assert err.count("\n") == 1
-    assert "cannot read" in err
+    assert "no rule file" in err
 
 
 def test_compile_text(paper_file: Path, capsys: pytest.CaptureFixture[str]) -> None:

@@ -18,7 +18,7 @@ from pathlib import Path
 from typing import Any
 
 from tactile_kb.compiler import KnowledgeBase, compile_rules
-from tactile_kb.engine import Decision
+from tactile_kb.engine import INCONSISTENT, Decision
 from tactile_kb.errors import Problem, RuleFileError, UsageError
 from tactile_kb.rules import RuleSet, load_rules
 
@@ -37,6 +37,7 @@ def register(sub: argparse._SubParsersAction[Any]) -> None:
     p = sub.add_parser("compile", help="compile a rule file and print its r(L) models")
     p.add_argument("rules", metavar="FILE_OR_NAME", help="a rule file or a packaged name")
     p.add_argument("--format", choices=("text", "json"), default="text")
+    p.add_argument("--json", action="store_true", help="print JSON (the same as --format json)")
     p.set_defaults(func=run_compile)
 
     p = sub.add_parser("query", help="classify an assignment of the propositions")
@@ -48,14 +49,21 @@ def register(sub: argparse._SubParsersAction[Any]) -> None:
 
 
 def _load(arg: str) -> RuleSet:
+    """The rule file or packaged rule set ``arg`` names (a name that names nothing is a
+    usage error, exit 2)."""
+    if not arg:
+        raise UsageError("no rule file given ('')")
     path = Path(arg)
     if path.exists() or arg.endswith((".yaml", ".yml")) or "/" in arg:
+        if not path.exists():
+            return load_rules(arg)  # the UsageError naming the packaged rule sets
         return load_rules(path)
     return load_rules(arg)
 
 
 def run_validate(args: argparse.Namespace) -> int:
     failed = False
+    usage = False
     for arg in args.files:
         problems: list[Problem]
         try:
@@ -64,8 +72,8 @@ def run_validate(args: argparse.Namespace) -> int:
             problems = list(exc.problems)
             summary = ""
         except UsageError as exc:
-            print(f"tactile-kb: error: {exc}", file=sys.stderr)
-            failed = True
+            print(f"tactile-kb validate: error: {exc}", file=sys.stderr)
+            usage = True
             continue
         else:
             # Feature bindings (against the registry, plugins included) and the logic are
@@ -91,7 +99,8 @@ def run_validate(args: argparse.Namespace) -> int:
         else:
             warn = f", {len(problems)} warning{'s' * (len(problems) != 1)}" if problems else ""
             print(summary + warn)
-    return 1 if failed else 0
+    # the exit-code rule of docs/cli.md: a name that names nothing is a usage error (2)
+    return 2 if usage else 1 if failed else 0
 
 
 def _bits_line(bits: tuple[str, ...]) -> str:
@@ -129,8 +138,15 @@ def compile_text(kb: KnowledgeBase) -> str:
 
 
 def run_compile(args: argparse.Namespace) -> int:
-    kb = compile_rules(_load(args.rules))
-    if args.format == "json":
+    rules = _load(args.rules)
+    # compile refuses what validate refuses: bad feature bindings and report measures too
+    from tactile_kb.pipeline import binding_problems
+
+    bad = [p for p in binding_problems(rules, missing="warning") if p.severity == "error"]
+    if bad:
+        raise RuleFileError(bad, rules.source.excerpt(bad[0].line, bad[0].column))
+    kb = compile_rules(rules)
+    if args.json or args.format == "json":
         data = kb.to_dict()
         data["economy"] = kb.economy().to_dict()
         print(json.dumps(data, indent=2, ensure_ascii=False))
@@ -185,4 +201,11 @@ def run_query(args: argparse.Namespace) -> int:
         print(json.dumps(decision.to_dict(), indent=2, ensure_ascii=False))
     else:
         print(decision_text(decision))
+    if decision.label == INCONSISTENT:
+        print(
+            "tactile-kb query: error: the values contradict the connections: "
+            + "; ".join(decision.violated),
+            file=sys.stderr,
+        )
+        return 1
     return 0
