@@ -171,7 +171,12 @@ def binding_problems(rules: RuleSet, *, missing: str = "error") -> list[Problem]
             continue
         message = check_binding(prop.feature.name, prop.feature.params)
         if message:
-            problems.append(rules.problem(("propositions", i, "feature"), message))
+            # at the parameter's value when the message is about one, else at the feature
+            where: tuple[str | int, ...] = ("propositions", i, "feature")
+            bad = [k for k in prop.feature.params if f"parameter {k!r}" in message]
+            if bad:
+                where = (*where, "params", bad[0])
+            problems.append(rules.problem(where, message))
     known = measure_names()
     for i, cls in enumerate(rules.classes):
         for k, name in enumerate(cls.report):

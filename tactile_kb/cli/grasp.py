@@ -166,6 +166,8 @@ def _grasp(args: argparse.Namespace) -> int:
         if args.json:
             out = plan.to_dict()
             out["object"] = plan.object or item
+            out["touches"] = record.touches
+            out["contacts"] = len(record.contacts)
             print(json.dumps(out, ensure_ascii=False), flush=True)
         else:
             print(_line(plan), flush=True)
