@@ -90,7 +90,8 @@ def test_grasp_lines_validate(files: dict[str, Path], capsys: pytest.CaptureFixt
     ok, failed = (json.loads(line) for line in capsys.readouterr().out.splitlines())
     validate("grasp", ok)
     validate("grasp", failed)
-    assert ok["touches"] > 0 and ok["contacts"] >= ok["touches"]
+    assert ok["touches"] > 0
+    assert ok["contacts"] >= ok["touches"]
     assert failed["error"]["kind"] == "ObjectError"
 
 
