@@ -40,7 +40,7 @@ import math
 from typing import TYPE_CHECKING, Any, Literal, Protocol, runtime_checkable
 
 from tactile_kb.errors import PluginError, UsageError
-from tactile_kb.finger import Finger, load_finger
+from tactile_kb.finger import Finger, layout_warnings, load_finger
 from tactile_kb.objects import ObjectLike, check_thickness, load_object, object_name
 from tactile_kb.plugins import Registry
 from tactile_kb.record import ExplorationRecord
@@ -245,6 +245,7 @@ class WorldExplorer(abc.ABC):
                 f"the mesh was moved {moved * 1000:+.3g} mm along z so that it rests on the "
                 "table (z = 0)"
             )
+        notes += layout_warnings(f)
         if warning:
             notes.append(f"noise σ = {noise * 1000:.3g} mm: {warning}")
         smallest = float(min(mesh.extents))

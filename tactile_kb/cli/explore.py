@@ -110,7 +110,7 @@ def _classify(args: argparse.Namespace) -> int:
             code = max(code, object_failed(args.command, item, exc, args.json))
             continue
         for note in notices(result.record):
-            print(f"tactile-kb: note: {item}: {note}", file=sys.stderr, flush=True)
+            print(f"tactile-kb classify: note: {item}: {note}", file=sys.stderr, flush=True)
         _emit(result, args.json)  # the answer is out before any picture is drawn
         if pictures:
             from tactile_kb.plot import plot_classification
@@ -147,7 +147,7 @@ def _explore(args: argparse.Namespace) -> int:
             code = max(code, object_failed(args.command, path, exc, False))
             continue
         for note in notices(record):
-            print(f"tactile-kb: note: {path}: {note}", file=sys.stderr, flush=True)
+            print(f"tactile-kb explore: note: {path}: {note}", file=sys.stderr, flush=True)
         print(
             f"{path}: {record.touches} touches, {len(record.contacts)} contacts, "
             f"path {record.path_length:.3f} m → {target}",
