@@ -428,7 +428,7 @@ decided reliably (the 33-sensor finger: 20.3°; the parallel and perpendicular t
 
 
 def layout_warnings(finger: Finger) -> list[str]:
-    """Warnings about a layout that is not built in: its :attr:`Coverage.problems`.
+    r"""Warnings about a layout that is not built in: its :attr:`Coverage.problems`.
 
     The built-in layouts are known (the 4-sensor finger is meant for layer contours and is
     documented as such), so they give none.
@@ -439,7 +439,7 @@ def layout_warnings(finger: Finger) -> list[str]:
     ...     "  - {elevation: -20, azimuth: 0}\n  - {elevation: -20, azimuth: 120}\n"
     ...     "  - {elevation: -20, azimuth: 240}\n")
     >>> print(layout_warnings(tripod)[0])  # doctest: +ELLIPSIS
-    finger 'tripod': a contact direction can be 70° from the sensor that reports it ...
+    finger 'tripod': a contact direction can be 69° from the sensor that reports it ...
     """
     if finger.name in BUILTIN_LAYOUTS:
         builtin = builtin_finger(finger.name)
