@@ -30,14 +30,12 @@ from __future__ import annotations
 import ctypes
 import math
 from collections.abc import Iterator, Mapping, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from functools import cached_property
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
-import sympy
-from sympy.logic import SOPform
 
 from tactile_kb.errors import Problem, RuleFileError, UsageError
 from tactile_kb.expr import Expr, fold
@@ -56,6 +54,8 @@ from tactile_kb.notation import (
 from tactile_kb.rules import RuleSet, load_rules, parse_rules
 
 if TYPE_CHECKING:
+    import sympy
+
     from tactile_kb.economy import Economy
     from tactile_kb.engine import Decision, Engine
 
@@ -285,11 +285,19 @@ class CompiledClass:
     factors: Factored
     paper: str
     ascii: str
-    expr: Any
+    ids: tuple[str, ...] = field(repr=False)
+    """The propositions in declared order (the indices of :attr:`factors`)."""
     bits: tuple[str, ...]
     ints: tuple[int, ...]
     proposition: str
     equation: str
+
+    @cached_property
+    def expr(self) -> Any:
+        """The reduced disjunction as a sympy Boolean (sympy is imported on first use)."""
+        import sympy
+
+        return to_sympy(self.factors, tuple(sympy.Symbol(name) for name in self.ids))
 
     def to_dict(self) -> dict[str, Any]:
         """A JSON-ready summary."""
@@ -349,7 +357,6 @@ class KnowledgeBase:
         self.gap_bdd: Node = self.r & ~taken
         self.classes: tuple[CompiledClass, ...] = ()
         self.problems: tuple[Problem, ...] = ()
-        self.symbols: tuple[sympy.Symbol, ...] = tuple(sympy.Symbol(name) for name in self.ids)
         self._sop_cache: dict[Node, Sop] = {}
 
     def __repr__(self) -> str:
@@ -357,6 +364,13 @@ class KnowledgeBase:
             f"<KnowledgeBase {self.rules.name!r}: n={self.n}, |r(L)|={self.r_count}, "
             f"{len(self.classes)} classes>"
         )
+
+    @cached_property
+    def symbols(self) -> tuple[sympy.Symbol, ...]:
+        """One sympy symbol per proposition, in declared order (sympy is imported here)."""
+        import sympy
+
+        return tuple(sympy.Symbol(name) for name in self.ids)
 
     # ----------------------------------------------------------------- models
 
@@ -392,6 +406,8 @@ class KnowledgeBase:
             if small and exact_count(bdd, f, support) <= EXACT_MAX_MINTERMS:
                 syms = [self.symbols[self.index[v]] for v in support]
                 rows = [[int(m[v]) for v in support] for m in bdd.pick_iter(f, care_vars=support)]
+                from sympy.logic import SOPform  # exact minimisation of a small function
+
                 expr = SOPform(syms, rows)
                 sop = sop_from_sympy(expr, {s: self.index[s.name] for s in syms})
             else:
@@ -549,7 +565,7 @@ def _compile_class(kb: KnowledgeBase, k: int) -> CompiledClass:
         factors=factors,
         paper=text_paper,
         ascii=ascii_text(factors, kb.ids),
-        expr=to_sympy(factors, kb.symbols),
+        ids=kb.ids,
         bits=bit_strings(factors, kb.n),
         ints=ints,
         proposition=f"L: object is {rc.name}",

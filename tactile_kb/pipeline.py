@@ -27,11 +27,12 @@ from functools import lru_cache
 from pathlib import Path
 from typing import Any
 
+from tactile_kb.bindings import binding_problems
 from tactile_kb.compiler import KnowledgeBase, compile_rules
 from tactile_kb.engine import Decision
-from tactile_kb.errors import Problem, RuleFileError, UsageError
+from tactile_kb.errors import RuleFileError, UsageError
 from tactile_kb.explorers import Explorer, Goal, get_explorer
-from tactile_kb.features import check_binding, get_feature, measure, measure_names
+from tactile_kb.features import get_feature, measure, measure_names
 from tactile_kb.finger import Finger
 from tactile_kb.model import ObjectModel, build_model
 from tactile_kb.objects import ObjectLike, object_name
@@ -146,48 +147,6 @@ def knowledge_base(rules: RulesLike) -> KnowledgeBase:
         kb = _compiled(str(p), p.stat().st_mtime_ns) if p.is_file() else compile_rules(ruleset)
     _check_bindings(kb.rules)
     return kb
-
-
-def binding_problems(rules: RuleSet, *, missing: str = "error") -> list[Problem]:
-    """Every proposition of ``rules`` whose feature binding is missing or wrong, located.
-
-    A rule file binds each proposition to a feature extractor by name with parameters; the
-    names are checked here against the feature registry (built-ins and plugins) and the
-    parameters against the extractor's signature. A proposition with no binding is reported
-    with severity ``missing``: an error for classifying objects, a warning for a rule file
-    used only for its logic (``tactile-kb compile``, ``query``).
-    """
-    problems = []
-    for i, prop in enumerate(rules.propositions):
-        if prop.feature is None:
-            problems.append(
-                rules.problem(
-                    ("propositions", i),
-                    f"no feature decides proposition {prop.id!r}, so objects cannot be "
-                    "classified with this file (add feature: NAME)",
-                    severity=missing,
-                )
-            )
-            continue
-        message = check_binding(prop.feature.name, prop.feature.params)
-        if message:
-            # at the parameter's value when the message is about one, else at the feature
-            where: tuple[str | int, ...] = ("propositions", i, "feature")
-            bad = [k for k in prop.feature.params if f"parameter {k!r}" in message]
-            if bad:
-                where = (*where, "params", bad[0])
-            problems.append(rules.problem(where, message))
-    known = measure_names()
-    for i, cls in enumerate(rules.classes):
-        for k, name in enumerate(cls.report):
-            if name not in known:
-                problems.append(
-                    rules.problem(
-                        ("classes", i, "report", k),
-                        f"unknown measure {name!r} (known: {', '.join(known)})",
-                    )
-                )
-    return problems
 
 
 def _check_bindings(rules: RuleSet) -> None:

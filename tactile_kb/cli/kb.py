@@ -15,12 +15,14 @@ import json
 import re
 import sys
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
-from tactile_kb.compiler import KnowledgeBase, compile_rules
-from tactile_kb.engine import INCONSISTENT, Decision
 from tactile_kb.errors import Problem, RuleFileError, UsageError
-from tactile_kb.rules import RuleSet, load_rules
+
+if TYPE_CHECKING:  # the compiler (dd, networkx) is imported by the commands that use it
+    from tactile_kb.compiler import KnowledgeBase
+    from tactile_kb.engine import Decision
+    from tactile_kb.rules import RuleSet
 
 __all__ = ["register"]
 
@@ -51,6 +53,8 @@ def register(sub: argparse._SubParsersAction[Any]) -> None:
 def _load(arg: str) -> RuleSet:
     """The rule file or packaged rule set ``arg`` names (a name that names nothing is a
     usage error, exit 2)."""
+    from tactile_kb.rules import load_rules
+
     if not arg:
         raise UsageError("no rule file given ('')")
     path = Path(arg)
@@ -78,7 +82,8 @@ def run_validate(args: argparse.Namespace) -> int:
         else:
             # Feature bindings (against the registry, plugins included) and the logic are
             # checked together, so that every problem is listed at once.
-            from tactile_kb.pipeline import binding_problems
+            from tactile_kb.bindings import binding_problems
+            from tactile_kb.compiler import compile_rules
 
             problems = binding_problems(rules, missing="warning")
             try:
@@ -140,7 +145,8 @@ def compile_text(kb: KnowledgeBase) -> str:
 def run_compile(args: argparse.Namespace) -> int:
     rules = _load(args.rules)
     # compile refuses what validate refuses: bad feature bindings and report measures too
-    from tactile_kb.pipeline import binding_problems
+    from tactile_kb.bindings import binding_problems
+    from tactile_kb.compiler import compile_rules
 
     bad = [p for p in binding_problems(rules, missing="warning") if p.severity == "error"]
     if bad:
@@ -194,6 +200,9 @@ def run_query(args: argparse.Namespace) -> int:
         raise UsageError("give either ID=0|1 assignments or --bits, not both")
     if args.bits is None and not args.assignments:
         raise UsageError("give ID=0|1 assignments or --bits")
+    from tactile_kb.compiler import compile_rules
+    from tactile_kb.engine import INCONSISTENT
+
     assignment: Any = args.bits if args.bits is not None else parse_assignments(args.assignments)
     kb = compile_rules(_load(args.rules))
     decision = kb.classify(assignment)
