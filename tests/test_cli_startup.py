@@ -60,3 +60,35 @@ def test_rule_file_commands_import_no_geometry_plots_or_plugins(argv: list[str])
     assert "tactile_kb.explorers" not in modules
     if argv[0] in ("validate", "compile"):  # the bindings are checked, without the geometry
         assert "tactile_kb.features" in modules
+
+
+class _Terminal:
+    def __init__(self, tty: bool) -> None:
+        self.tty = tty
+        self.text = ""
+
+    def isatty(self) -> bool:
+        return self.tty
+
+    def write(self, text: str) -> int:
+        self.text += text
+        return len(text)
+
+    def flush(self) -> None:
+        pass
+
+
+@pytest.mark.parametrize("tty", [True, False])
+def test_slow_work_shows_progress_on_a_terminal_only(tty: bool) -> None:
+    import time
+
+    from tactile_kb.cli.options import progress
+
+    stream = _Terminal(tty)
+    with progress("sphere.stl", stream=stream):  # type: ignore[arg-type]
+        time.sleep(1.0)
+    assert ("working on sphere.stl" in stream.text) is tty
+    quick = _Terminal(True)
+    with progress("cube.stl", stream=quick):  # type: ignore[arg-type]
+        pass
+    assert quick.text == ""  # work that ends at once shows nothing
