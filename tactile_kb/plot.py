@@ -23,7 +23,7 @@ Examples
 >>> from tactile_kb.synthetic import sample_record
 >>> fig = plot_exploration(sample_record(box(0.1, 0.06, 0.04), builtin_finger("33"), seed=1))
 >>> [round(float(v)) for v in fig.get_size_inches() * fig.dpi]
-[640, 480]
+[800, 600]
 """
 
 from __future__ import annotations
@@ -69,7 +69,7 @@ __all__ = [
 FORMATS = {".png": "png", ".svg": "svg", ".pdf": "pdf"}
 """File extensions :func:`save_figure` writes, and their formats."""
 
-DEFAULT_SIZE = (6.4, 4.8)
+DEFAULT_SIZE = (8.0, 6.0)
 DEFAULT_DPI = 100
 TREE_MINTERM_LIMIT = 1 << 14
 """The choice tree enumerates r(L) up to this many minterms; beyond, only the phases show."""
@@ -78,7 +78,10 @@ TREE_LEAF_LIMIT = 48
 _TREE_RIGHT = 0.70  # x of the last phase column (axes fraction)
 _TREE_LEAF = 0.76  # x where the answers begin
 _LEAF_CHARS = 26
-_DISCRETE_SENSORS = 8  # up to this many sensors get legend entries instead of a colour bar
+_FONT = 10  # axis labels and legends, points
+_TICK_FONT = 9  # tick labels, points
+_TITLE_FONT = 11
+_MAX_FACE_ENTRIES = 10  # faces beyond these share one legend entry
 _HIGHLIGHT = "#e66100"
 _MODEL = "#1f5fbf"
 _GRASP = "#c01c28"
@@ -111,21 +114,13 @@ def save_figure(fig: Figure, path: str | Path, *, dpi: float | None = None) -> P
 # ---------------------------------------------------------------------------------------------
 
 
-def _sensor_of(record: ExplorationRecord) -> np.ndarray[Any, np.dtype[np.int64]]:
-    out = []
-    for c in record.contacts:
-        s = c.sensor if c.sensor >= 0 else (c.sensors[0] if c.sensors else 0)
-        out.append(s)
-    return np.asarray(out, dtype=np.int64)
-
-
 def _set_equal(ax: Any, points: np.ndarray[Any, np.dtype[np.float64]]) -> None:
     lo, hi = points.min(axis=0), points.max(axis=0)
     centre, half = (lo + hi) / 2.0, max(float((hi - lo).max()) / 2.0, 1e-3) * 1.05
     ax.set_xlim(centre[0] - half, centre[0] + half)
     ax.set_ylim(centre[1] - half, centre[1] + half)
     ax.set_zlim(max(centre[2] - half, lo[2] - 0.002), centre[2] + half)
-    ax.set_box_aspect((1.0, 1.0, 1.0), zoom=1.15)
+    ax.set_box_aspect((1.0, 1.0, 1.0), zoom=0.95)
 
 
 def _draw_3d(
@@ -152,58 +147,34 @@ def _draw_3d(
         extent.append(path)
     if record.contacts:
         pts = np.asarray([c.point for c in record.contacts], dtype=float)
-        sensors = _sensor_of(record)
-        count = max(len(record.sensor_directions), int(sensors.max()) + 1, 1)
-        norm = Normalize(0, max(count - 1, 1))
-        if count <= _DISCRETE_SENSORS:  # a few sensors: one legend entry each
-            from matplotlib import colormaps
-
-            cmap = colormaps["turbo"]
-            for k in sorted(set(sensors.tolist())):
-                sel = sensors == k
-                ax.scatter(
-                    pts[sel, 0],
-                    pts[sel, 1],
-                    pts[sel, 2],
-                    color=cmap(norm(k)),
-                    s=14,
-                    depthshade=False,
-                    label=f"sensor {k}",
-                )
-        else:
-            sc = ax.scatter(
-                pts[:, 0],
-                pts[:, 1],
-                pts[:, 2],
-                c=sensors,
-                cmap="turbo",
-                norm=norm,
-                s=14,
-                depthshade=False,
-                label="contacts",
-            )
-            pos = ax.get_position()
-            ax.set_position((pos.x0, pos.y0, pos.width * 0.84, pos.height))
-            x = pos.x0 + pos.width * 0.86 if layered else pos.x1 + 0.01
-            cax = fig.add_axes((x, pos.y0 + 0.3 * pos.height, 0.012, 0.4 * pos.height))
-            bar = fig.colorbar(sc, cax=cax, orientation="vertical")
-            bar.set_label("sensor that fired", fontsize=6, labelpad=1)
-            bar.ax.tick_params(labelsize=6)
+        _draw_contacts(ax, pts, model)
         extent.append(pts)
     poly = model.polyhedron if model is not None else None
     solid = grasp.solid if grasp is not None else None
     if poly is not None:
         segs = [poly.vertices[[i, j]] for i, j in poly.edges]
-        if model is not None and not model.convex:  # only the convex envelope of the object
+        curved = model is not None and _is_curved(model)
+        if model is not None and (not model.convex or curved):
+            # only an envelope: the object lies inside it, touching it where it was touched
+            what = "curved surface" if curved else "concave faces"
             ax.add_collection3d(
                 Line3DCollection(
-                    segs, colors=_MODEL, linewidths=0.6, linestyles="dashed", alpha=0.5
+                    segs, colors=_MODEL, linewidths=0.8, linestyles="dashed", alpha=0.6
                 )
             )
-            ax.plot([], [], [], color=_MODEL, lw=0.6, ls="--", alpha=0.5, label="convex envelope")
+            ax.plot(
+                [],
+                [],
+                [],
+                color=_MODEL,
+                lw=0.8,
+                ls="--",
+                alpha=0.6,
+                label=f"envelope of the touched planes\n({what}: the object lies inside)",
+            )
         else:
             ax.add_collection3d(Line3DCollection(segs, colors=_MODEL, linewidths=1.2))
-            ax.plot([], [], [], color=_MODEL, lw=1.2, label="polyhedron")
+            ax.plot([], [], [], color=_MODEL, lw=1.2, label="polyhedron (the model)")
         extent.append(np.asarray(poly.vertices, dtype=float))
     if solid is not None:
         segs = _block_edges(solid)
@@ -219,18 +190,96 @@ def _draw_3d(
         for q, m in zip(p, n, strict=True):
             start = q + jaw * m
             ax.quiver(*start, *(-jaw * m), color=_GRASP, lw=2.0, arrow_length_ratio=0.3)
-        ax.plot([], [], [], color=_GRASP, lw=1.5, label="grasp")
+        ax.plot([], [], [], color=_GRASP, lw=1.5, label="grasp (jaws and their line)")
         if grasp.com is not None:
             c = np.asarray(grasp.com)
-            ax.scatter([c[0]], [c[1]], [c[2]], color="k", marker="x", s=30, depthshade=False)
+            ax.scatter(
+                [c[0]],
+                [c[1]],
+                [c[2]],
+                color="k",
+                marker="x",
+                s=40,
+                depthshade=False,
+                label="centre of mass",
+            )
     if extent:
         _set_equal(ax, np.vstack(extent))
-    ax.set_xlabel("x (m)", fontsize=7, labelpad=-2)
-    ax.set_ylabel("y (m)", fontsize=7, labelpad=-2)
-    ax.set_zlabel("z (m)", fontsize=7, labelpad=-2)
-    ax.tick_params(labelsize=5, pad=0)
-    if ax.get_legend_handles_labels()[0]:  # an empty record draws nothing to name
-        ax.legend(loc="upper left", fontsize=6, frameon=False)
+    for axis in "xyz":
+        getattr(ax, f"set_{axis}label")(f"{axis} (mm)", fontsize=_FONT, labelpad=6)
+    _millimetres(ax)
+    ax.tick_params(labelsize=_TICK_FONT, pad=1)
+
+
+def _millimetres(ax: Any) -> None:
+    """Tick labels in millimetres (the data stay in metres), a few per axis."""
+    from matplotlib.ticker import FuncFormatter, MaxNLocator
+
+    fmt = FuncFormatter(lambda v, _pos: f"{v * 1000:.0f}")
+    for axis in (ax.xaxis, ax.yaxis, *((ax.zaxis,) if hasattr(ax, "zaxis") else ())):
+        axis.set_major_locator(MaxNLocator(4))
+        axis.set_major_formatter(fmt)
+
+
+def _is_curved(model: ObjectModel) -> bool:
+    """What the ``surface_curved`` feature says of the model (False when it cannot say)."""
+    from tactile_kb.features import get_feature
+
+    try:
+        return bool(get_feature("surface_curved").fn(model))
+    except Exception:  # a model the feature cannot judge is drawn as it is
+        return False
+
+
+def _facing(normal: Sequence[float]) -> str:
+    """A few words for a face's outward normal: top, bottom, or the compass side it faces."""
+    x, y, z = (float(v) for v in normal)
+    if z > 0.9:
+        return "top"
+    if z < -0.9:
+        return "bottom"
+    names = ["+x", "+x+y", "+y", "−x+y", "−x", "−x−y", "−y", "+x−y"]
+    side = names[round(float(np.degrees(np.arctan2(y, x))) / 45.0) % 8]
+    tilt = "" if abs(z) < 0.26 else (" tilted up" if z > 0 else " tilted down")
+    return f"facing {side}{tilt}"
+
+
+def _draw_contacts(
+    ax: Any, pts: np.ndarray[Any, np.dtype[np.float64]], model: ObjectModel | None
+) -> None:
+    """Contact points coloured by the face (fitted plane) they were assigned to, with a legend
+    entry per face; contacts on no face are grey."""
+    from matplotlib import colormaps
+
+    faces = [] if model is None else [f for f in model.faces if f.source == "contacts"]
+    owner = np.full(len(pts), -1)
+    for k, face in enumerate(faces):
+        idx = [i for i in face.contacts if 0 <= i < len(pts)]
+        owner[idx] = k
+    cmap = colormaps["tab10"]
+    order = sorted(range(len(faces)), key=lambda k: -len(faces[k].contacts))
+    for rank, k in enumerate(order):
+        sel = owner == k
+        if not sel.any():
+            continue
+        many = rank >= _MAX_FACE_ENTRIES
+        label = (
+            None
+            if many
+            else f"face {rank + 1}, {_facing(faces[k].normal)} ({int(sel.sum())} contacts)"
+        )
+        colour = "0.35" if many else cmap(rank % 10)
+        ax.scatter(*pts[sel].T, color=colour, s=10, depthshade=False, label=label)
+    rest = owner == -1
+    if len(faces) > _MAX_FACE_ENTRIES:
+        ax.scatter(
+            [], [], [], color="0.35", s=10, label=f"{len(faces) - _MAX_FACE_ENTRIES} more faces"
+        )
+    if rest.any():
+        what = "contacts" if not faces else "contacts on no face"
+        ax.scatter(
+            *pts[rest].T, color="0.6", s=8, depthshade=False, label=f"{what} ({int(rest.sum())})"
+        )
 
 
 def _block_edges(solid: SectionSolid) -> list[np.ndarray[Any, np.dtype[np.float64]]]:
@@ -274,12 +323,19 @@ def _draw_layers(ax: Any, model: ObjectModel, grasp: GraspPlan | None = None) ->
     if grasp is not None and grasp.com is not None:
         ax.plot([grasp.com[0]], [grasp.com[1]], "kx", ms=5, label="centre of mass")
     ax.set_aspect("equal", adjustable="datalim")
-    ax.set_title("layer contours", fontsize=8)
-    ax.set_xlabel("x (m)", fontsize=7)
-    ax.set_ylabel("y (m)", fontsize=7)
-    ax.tick_params(labelsize=6)
-    if layers:
-        ax.legend(fontsize=6, frameon=False, loc="best")
+    ax.set_title("layer contours, seen from above", fontsize=_FONT)
+    ax.set_xlabel("x (mm)", fontsize=_FONT)
+    ax.set_ylabel("y (mm)", fontsize=_FONT)
+    _millimetres(ax)
+    ax.tick_params(labelsize=_TICK_FONT)
+    if layers:  # below the panel, never over the contours
+        ax.legend(
+            fontsize=_FONT - 2,
+            frameon=False,
+            loc="upper center",
+            bbox_to_anchor=(0.5, -0.18),
+            ncol=1,
+        )
 
 
 def plot_exploration(
@@ -331,37 +387,73 @@ def plot_exploration(
     layered = any(len(lay.contour) >= 3 for lay in model.layers) and (
         model.polyhedron is None or not model.convex
     )
-    if layered:
-        grid = fig.add_gridspec(1, 2, width_ratios=(1.35, 1.0), wspace=0.4, top=0.8)
-        ax3 = fig.add_subplot(grid[0, 0], projection="3d")
-        ax2 = fig.add_subplot(grid[0, 1])
+    if layered:  # the 3-D view and the layer contours side by side, one legend below
+        ax3 = fig.add_axes((0.0, 0.27, 0.52, 0.58), projection="3d")
+        ax2 = fig.add_axes((0.62, 0.33, 0.35, 0.48))
         _draw_layers(ax2, model, plan)
-    else:
-        ax3 = fig.add_subplot(1, 1, 1, projection="3d")
+    else:  # the 3-D view, its legend on the right
+        ax3 = fig.add_axes((0.0, 0.02, 0.58, 0.82), projection="3d")
     _draw_3d(ax3, record, model, mesh, plan, fig, layered)
-    if title is None:
-        if model.polyhedron is None and model.layers:
-            found = f"{len(model.layers)} layers"
-        else:
-            found = f"{len(model.polyhedron.faces) if model.polyhedron is not None else 0} faces"
-        title = f"{record.object or 'object'}: {record.touches} touches, {found}"
-        if plan is not None:
-            title += (
-                f"\ngrasp {plan.best.width * 1000:.0f} mm, ε = {plan.best.quality:.3f}"
-                if plan.best is not None
-                else f"\nno grasp: {plan.reason}"
+    handles, labels = ax3.get_legend_handles_labels()
+    if handles:  # an empty record draws nothing to name
+        if layered:
+            fig.legend(
+                handles,
+                labels,
+                loc="lower center",
+                ncol=2,
+                fontsize=_FONT - 1,
+                frameon=False,
+                bbox_to_anchor=(0.5, 0.0),
             )
-            if plan.best is not None and plan.basis == "sections":
-                title += " (on the layer contours)"
-    fig.suptitle(_wrap(title, size[0]), fontsize=8)
+        else:
+            fig.legend(
+                handles,
+                labels,
+                loc="center left",
+                fontsize=_FONT - 1,
+                frameon=False,
+                bbox_to_anchor=(0.62, 0.45),
+            )
+    if title is None:
+        title = f"{record.object or 'object'}\n{_counts(model)}"
+        if plan is not None:
+            title += "\n" + _grasp_line(plan)
+    fig.suptitle(_wrap(title, size[0]), fontsize=_TITLE_FONT)
     if path is not None:
         save_figure(fig, path)
     return fig
 
 
+def _counts(model: ObjectModel) -> str:
+    """``9 touches, 139 contacts, 6 faces``: what the finger did and what it found."""
+    record = model.record
+    if model.polyhedron is None and model.layers:
+        found = f"{len(model.layers)} layer contours"
+    else:
+        n = len(model.polyhedron.faces) if model.polyhedron is not None else 0
+        found = f"{n} face{'s' * (n != 1)} in the model"
+    return (
+        f"{record.touches} touches (a sensor closing), {len(record.contacts)} contacts "
+        f"recorded, {found}"
+    )
+
+
+def _grasp_line(plan: GraspPlan) -> str:
+    b = plan.best
+    if b is None:
+        return f"no grasp: {plan.reason}"
+    force = "cannot hold it" if b.least_force is None else f"least force {b.least_force:.1f} N"
+    where = " on the layer contours" if plan.basis == "sections" else ""
+    return (
+        f"grasp{where}: jaws {b.width * 1000:.0f} mm apart, "
+        f"{b.com_offset * 1000:.0f} mm from the centre of mass, {force}"
+    )
+
+
 def _wrap(text: str, width_in: float) -> str:
-    """Wrap each line of a title to the figure's width (about 15 characters per inch at 8 pt)."""
-    chars = max(int(width_in * 15), 20)
+    """Wrap each line of a title to the figure's width (about 11 characters per inch at 11 pt)."""
+    chars = max(int(width_in * 11), 20)
     return "\n".join(textwrap.fill(line, chars) for line in text.splitlines())
 
 
@@ -384,8 +476,15 @@ def plot_classification(
     if not isinstance(model, ObjectModel) or decision is None:
         raise UsageError("plot_classification needs a classification result (model, decision)")
     answer = getattr(result, "answer", decision.answer)  # with its reported measures
-    title = f"{getattr(result, 'object', '') or model.record.object}: {answer}"
-    title += f"  [{decision.bits}]"
+    name = getattr(result, "object", "") or model.record.object
+    title = f"{name}: {answer}\n{_counts(model)}"
+    if isinstance(grasp, GraspPlan):
+        title += "\n" + _grasp_line(grasp)
+    elif grasp is True:
+        from tactile_kb.grasp import plan_grasp
+
+        grasp = plan_grasp(model)
+        title += "\n" + _grasp_line(grasp)
     fig = plot_exploration(model, None, mesh=mesh, grasp=grasp, title=title, size=size, dpi=dpi)
     if path is not None:
         save_figure(fig, path)
