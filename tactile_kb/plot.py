@@ -75,9 +75,10 @@ TREE_MINTERM_LIMIT = 1 << 14
 """The choice tree enumerates r(L) up to this many minterms; beyond, only the phases show."""
 TREE_LEAF_LIMIT = 48
 
-_TREE_RIGHT = 0.70  # x of the last phase column (axes fraction)
-_TREE_LEAF = 0.76  # x where the answers begin
-_LEAF_CHARS = 26
+_TREE_RIGHT = 0.66  # x of the last phase column (axes fraction)
+_TREE_LEAF = 0.70  # x where the answers begin
+_LEAF_CHARS = 34
+_LEAF_PT = 34.0  # vertical points one answer box needs (two lines of 9 pt and a gap)
 _FONT = 10  # axis labels and legends, points
 _TICK_FONT = 9  # tick labels, points
 _TITLE_FONT = 11
@@ -232,7 +233,7 @@ def _is_curved(model: ObjectModel) -> bool:
 
 
 def _facing(normal: Sequence[float]) -> str:
-    """A few words for a face's outward normal: top, bottom, or the compass side it faces."""
+    """A few words for a face's outward normal: top, bottom, or the side it faces."""
     x, y, z = (float(v) for v in normal)
     if z > 0.9:
         return "top"
@@ -240,8 +241,8 @@ def _facing(normal: Sequence[float]) -> str:
         return "bottom"
     names = ["+x", "+x+y", "+y", "−x+y", "−x", "−x−y", "−y", "+x−y"]
     side = names[round(float(np.degrees(np.arctan2(y, x))) / 45.0) % 8]
-    tilt = "" if abs(z) < 0.26 else (" tilted up" if z > 0 else " tilted down")
-    return f"facing {side}{tilt}"
+    tilt = "" if abs(z) < 0.26 else (", up" if z > 0 else ", down")
+    return f"{side}{tilt}"
 
 
 def _draw_contacts(
@@ -263,11 +264,7 @@ def _draw_contacts(
         if not sel.any():
             continue
         many = rank >= _MAX_FACE_ENTRIES
-        label = (
-            None
-            if many
-            else f"face {rank + 1}, {_facing(faces[k].normal)} ({int(sel.sum())} contacts)"
-        )
+        label = None if many else f"face {rank + 1}: {_facing(faces[k].normal)} ({int(sel.sum())})"
         colour = "0.35" if many else cmap(rank % 10)
         ax.scatter(*pts[sel].T, color=colour, s=10, depthshade=False, label=label)
     rest = owner == -1
@@ -276,7 +273,7 @@ def _draw_contacts(
             [], [], [], color="0.35", s=10, label=f"{len(faces) - _MAX_FACE_ENTRIES} more faces"
         )
     if rest.any():
-        what = "contacts" if not faces else "contacts on no face"
+        what = "contacts" if not faces else "on no face"
         ax.scatter(
             *pts[rest].T, color="0.6", s=8, depthshade=False, label=f"{what} ({int(rest.sum())})"
         )
@@ -330,10 +327,10 @@ def _draw_layers(ax: Any, model: ObjectModel, grasp: GraspPlan | None = None) ->
     ax.tick_params(labelsize=_TICK_FONT)
     if layers:  # below the panel, never over the contours
         ax.legend(
-            fontsize=_FONT - 2,
+            fontsize=_FONT - 1,
             frameon=False,
             loc="upper center",
-            bbox_to_anchor=(0.5, -0.18),
+            bbox_to_anchor=(0.5, -0.16),
             ncol=1,
         )
 
@@ -387,34 +384,30 @@ def plot_exploration(
     layered = any(len(lay.contour) >= 3 for lay in model.layers) and (
         model.polyhedron is None or not model.convex
     )
-    if layered:  # the 3-D view and the layer contours side by side, one legend below
-        ax3 = fig.add_axes((0.0, 0.27, 0.52, 0.58), projection="3d")
-        ax2 = fig.add_axes((0.62, 0.33, 0.35, 0.48))
+    if layered:  # the 3-D view and the layer contours side by side, each legend below its view
+        ax3 = fig.add_axes((0.0, 0.30, 0.52, 0.56), projection="3d")
+        ax2 = fig.add_axes((0.62, 0.40, 0.35, 0.44))
         _draw_layers(ax2, model, plan)
     else:  # the 3-D view, its legend on the right
-        ax3 = fig.add_axes((0.0, 0.02, 0.58, 0.82), projection="3d")
+        ax3 = fig.add_axes((0.0, 0.02, 0.56, 0.82), projection="3d")
     _draw_3d(ax3, record, model, mesh, plan, fig, layered)
     handles, labels = ax3.get_legend_handles_labels()
     if handles:  # an empty record draws nothing to name
-        if layered:
-            fig.legend(
-                handles,
-                labels,
-                loc="lower center",
-                ncol=2,
-                fontsize=_FONT - 1,
-                frameon=False,
-                bbox_to_anchor=(0.5, 0.0),
-            )
-        else:
-            fig.legend(
-                handles,
-                labels,
-                loc="center left",
-                fontsize=_FONT - 1,
-                frameon=False,
-                bbox_to_anchor=(0.62, 0.45),
-            )
+        where: dict[str, Any] = (
+            {"loc": "upper center", "ncol": 2, "bbox_to_anchor": (0.27, 0.255)}
+            if layered
+            else {"loc": "center left", "ncol": 1, "bbox_to_anchor": (0.58, 0.45)}
+        )
+        fig.legend(
+            handles,
+            labels,
+            fontsize=_FONT - 1,
+            frameon=False,
+            title="(n): contacts on the face" if any(": " in x for x in labels) else None,
+            title_fontsize=_FONT - 1,
+            columnspacing=1.0,
+            **where,
+        )
     if title is None:
         title = f"{record.object or 'object'}\n{_counts(model)}"
         if plan is not None:
@@ -639,12 +632,15 @@ def plot_tree(
     phases = kb.rules.phases
     ncol = len(phases) + 1
     root = choice_tree(kb)
-    if root is not None and root.leaves > TREE_LEAF_LIMIT:
-        root = None
+    collapsed = False
+    fit = max(6, int(0.84 * size[1] * 72.0 / _LEAF_PT))  # leaves that fit, legibly
+    if root is not None and root.leaves > fit:
+        root = _collapse(root, values if decision is not None else None, fit)
+        collapsed = True
     xs = np.linspace(0.03, _TREE_RIGHT, ncol)
     # phase headers: the paper's "classification carried out in phases"
     column_pt = (xs[1] - xs[0]) * 0.98 * size[0] * 72.0
-    head_font = float(np.clip(column_pt / 8.0, 4.5, 7.0))
+    head_font = float(np.clip(column_pt / 7.0, 6.5, 9.0))
     chars = max(int(column_pt / (0.55 * head_font)), 4)
     for k, ph in enumerate(phases):
         props = ", ".join(ph.propositions)
@@ -658,13 +654,19 @@ def plot_tree(
             fontsize=head_font,
             color="0.25",
         )
-    ax.text(_TREE_LEAF + 0.01, 1.0, "answer", ha="left", va="top", fontsize=7, color="0.25")
+    ax.text(_TREE_LEAF + 0.01, 1.0, "answer", ha="left", va="top", fontsize=9, color="0.25")
     ax.set_xlim(0, 1)
     ax.set_ylim(-0.02, 1.02)
     title = f"choice tree of {kb.rules.name}"
     if decision is not None:
-        title += f": {decision.answer}"
-    fig.suptitle(title, fontsize=9)
+        title += f": {decision.answer} (bits {decision.bits}, the highlighted path)"
+    if collapsed:
+        title += (
+            "\nbranches off the path folded: each grey box lists the answers below it"
+            if decision is not None
+            else "\nthe deeper branches folded: each grey box lists the answers below it"
+        )
+    fig.suptitle(title, fontsize=_TITLE_FONT)
     if root is None:
         _phase_summary(ax, kb, xs, values)
     else:
@@ -672,6 +674,68 @@ def plot_tree(
     if path is not None:
         save_figure(fig, path)
     return fig
+
+
+def _answers_below(node: TreeNode) -> list[str]:
+    if not node.children:
+        return [node.answer] if node.answer else []
+    out: list[str] = []
+    for child in node.children:
+        out += [a for a in _answers_below(child) if a not in out]
+    return out
+
+
+def _folded(node: TreeNode) -> TreeNode:
+    """A leaf standing for ``node``'s subtree, listing the answers below it."""
+    answers = _answers_below(node)
+    if len(answers) == 1 and node.leaves == 1:
+        return node
+    shown = "; ".join(a.removeprefix("OBJECT IS ").lower() for a in answers[:2])
+    more = f"; +{len(answers) - 2} more" if len(answers) > 2 else ""
+    return TreeNode(
+        phase=node.phase,
+        values=node.values,
+        label="folded",
+        answer=f"({node.leaves} cases) {shown}{more}",
+        count=node.count,
+    )
+
+
+def _collapse(root: TreeNode, values: Mapping[str, bool | None] | None, limit: int) -> TreeNode:
+    """A copy of the tree small enough to read: with ``values``, the branches off the path
+    they take are folded into one leaf each; without, the tree is unfolded level by level
+    while it has at most ``limit`` leaves."""
+    if values is not None:
+
+        def keep(node: TreeNode) -> TreeNode:
+            kids = [keep(c) if _on_path(c, values) else _folded(c) for c in node.children]
+            return TreeNode(node.phase, node.values, kids, node.label, node.answer, node.count)
+
+        return keep(root)
+    # Unfold the biggest folded branch (most members of r(L)) while the tree still fits.
+    opened: set[int] = {id(root)}
+    blocked: set[int] = set()
+
+    def build(node: TreeNode) -> TreeNode:
+        if id(node) not in opened:
+            return _folded(node)
+        kids = [build(c) for c in node.children]
+        return TreeNode(node.phase, node.values, kids, node.label, node.answer, node.count)
+
+    def folded_nodes(node: TreeNode) -> list[TreeNode]:
+        if id(node) not in opened:
+            return [node] if node.children and id(node) not in blocked else []
+        return [f for c in node.children for f in folded_nodes(c)]
+
+    while True:
+        candidates = sorted(folded_nodes(root), key=lambda n: -n.count)
+        if not candidates:
+            return build(root)
+        best = candidates[0]
+        opened.add(id(best))
+        if build(root).leaves > limit:
+            opened.discard(id(best))
+            blocked.add(id(best))
 
 
 def _draw_tree(
@@ -690,7 +754,7 @@ def _draw_tree(
     # leaves: two lines of _LEAF_CHARS characters in the right-hand column
     width_pt = (1.0 - _TREE_LEAF - 0.01) * 0.98 * size[0] * 72.0
     height_pt = (top - bottom) * 0.9 * size[1] * 72.0 / n_leaves
-    font = float(np.clip(min(width_pt / (0.6 * _LEAF_CHARS), height_pt / 2.8), 3.5, 8.0))
+    font = float(np.clip(min(width_pt / (0.6 * _LEAF_CHARS), height_pt / 3.0), 6.0, 9.0))
 
     def place(node: TreeNode) -> float:
         if not node.children:
@@ -724,17 +788,21 @@ def _draw_tree(
             draw(child, child_hot)
         if not node.children:
             label_hot = hot and decision is not None and node.label == decision.label
+            folded = node.label == "folded"
             ax.text(
                 x_leaf + 0.01,
                 node.y,
-                textwrap.fill(node.answer, _LEAF_CHARS),
+                textwrap.fill(
+                    textwrap.shorten(node.answer, 2 * _LEAF_CHARS - 2, placeholder=" …"),
+                    _LEAF_CHARS,
+                ),
                 ha="left",
                 va="center",
                 fontsize=font,
                 color="k",
                 bbox={
                     "boxstyle": "round,pad=0.25",
-                    "fc": "#fde2cf" if label_hot else "#eef2f8",
+                    "fc": "#fde2cf" if label_hot else "0.93" if folded else "#eef2f8",
                     "ec": _HIGHLIGHT if label_hot else "0.6",
                     "lw": 1.6 if label_hot else 0.5,
                 },

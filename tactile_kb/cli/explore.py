@@ -113,10 +113,12 @@ def _classify(args: argparse.Namespace) -> int:
             print(f"tactile-kb classify: note: {item}: {note}", file=sys.stderr, flush=True)
         _emit(result, args.json)  # the answer is out before any picture is drawn
         if pictures:
+            from tactile_kb.objects import load_object
             from tactile_kb.plot import plot_classification
 
-            try:
-                plot_classification(result, pictures[index])
+            try:  # with the true mesh, faint, when the object was a mesh file
+                mesh = None if is_record else load_object(item)
+                plot_classification(result, pictures[index], mesh=mesh)
             except Exception as exc:
                 code = max(code, object_failed(args.command, item, exc, False))
     return code
