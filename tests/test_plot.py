@@ -212,3 +212,39 @@ def test_module_examples() -> None:
     result = doctest.testmod(tactile_kb.plot, optionflags=doctest.ELLIPSIS)
     assert result.attempted > 0
     assert result.failed == 0
+
+
+def test_a_large_tree_is_folded_off_the_path_and_the_answer_highlighted() -> None:
+    kb = compile_rules("polyhedra")
+    full = choice_tree(kb)
+    assert full is not None
+    assert full.leaves > 48
+    decision = kb.classify("101101111000000")
+    fig = plot_tree(kb, decision=decision)
+    (ax,) = fig.axes
+    boxes = [t for t in ax.texts if t.get_bbox_patch() is not None]
+    assert 4 <= len(boxes) <= 20  # legible: folded to what fits
+    hot = [t for t in boxes if to_hex(t.get_bbox_patch().get_edgecolor()) == "#e66100"]
+    assert [t.get_text().replace("\n", " ") for t in hot] == [decision.answer]
+    assert all(t.get_fontsize() >= 6 for t in ax.texts)
+    assert "folded" in fig.texts[0].get_text()
+
+
+def test_classify_plot_draws_the_true_mesh(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    import tactile_kb.plot
+    from tactile_kb.cli import main
+
+    seen: list[object] = []
+    real = tactile_kb.plot.plot_classification
+
+    def spy(result: object, path: object = None, **kw: object) -> object:
+        seen.append(kw.get("mesh"))
+        return real(result, path, **kw)  # type: ignore[arg-type]
+
+    monkeypatch.setattr(tactile_kb.plot, "plot_classification", spy)
+    stl = tmp_path / "cube.stl"
+    box(0.08, 0.08, 0.08).export(stl)
+    assert main(["classify", str(stl), "--plot", str(tmp_path / "c.png")]) == 0
+    (mesh,) = seen
+    assert mesh is not None
+    assert len(mesh.faces) == 12  # type: ignore[attr-defined]
