@@ -547,3 +547,27 @@ def test_fuzzed_records_load_or_give_one_line(data: object, depth: int) -> None:
     if error is not None:
         assert str(error).startswith("r.json")
         assert "\n" not in str(error)
+
+
+def test_validate_goes_on_after_a_file_that_exhausts_memory(
+    tmp_path: Path,
+    good_rules: Path,
+    monkeypatch: pytest.MonkeyPatch,
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    import tactile_kb.cli.kb as kb_cli
+
+    real = kb_cli._load
+
+    def flaky(arg: str) -> object:
+        if arg.endswith("huge.yaml"):
+            raise MemoryError
+        return real(arg)
+
+    monkeypatch.setattr(kb_cli, "_load", flaky)
+    huge = tmp_path / "huge.yaml"
+    huge.write_text(MINI)
+    assert main(["validate", str(huge), str(good_rules)]) == 1
+    captured = capsys.readouterr()
+    assert f"tactile-kb validate: error: {huge}: out of memory" in captured.err
+    assert captured.out.startswith(f"{good_rules}: ok:")

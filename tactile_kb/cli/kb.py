@@ -17,6 +17,7 @@ import sys
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+from tactile_kb.cli.options import EXIT_FAILED, EXIT_OK, EXIT_USAGE, object_failed
 from tactile_kb.errors import Problem, RuleFileError, UsageError
 
 if TYPE_CHECKING:  # the compiler (dd, networkx) is imported by the commands that use it
@@ -66,46 +67,52 @@ def _load(arg: str) -> RuleSet:
 
 
 def run_validate(args: argparse.Namespace) -> int:
-    failed = False
-    usage = False
+    code = EXIT_OK
     for arg in args.files:
-        problems: list[Problem]
-        try:
-            rules = _load(arg)
-        except RuleFileError as exc:
-            problems = list(exc.problems)
-            summary = ""
-        except UsageError as exc:
-            print(f"tactile-kb validate: error: {exc}", file=sys.stderr)
-            usage = True
-            continue
-        else:
-            # Feature bindings (against the registry, plugins included) and the logic are
-            # checked together, so that every problem is listed at once.
-            from tactile_kb.bindings import binding_problems
-            from tactile_kb.compiler import compile_rules
+        try:  # any failure, even out of memory, is this file's alone
+            code = max(code, _validate_one(arg))
+        except Exception as exc:
+            code = max(code, object_failed("validate", arg, exc, False))
+    return code
 
-            problems = binding_problems(rules, missing="warning")
-            try:
-                kb = compile_rules(rules)
-                problems += list(kb.problems)
-                summary = (
-                    f"{kb.rules.file}: ok: {kb.n} propositions, {len(kb.classes)} classes, "
-                    f"|r(L)| = {kb.r_count}"
-                )
-            except RuleFileError as exc:
-                problems += list(exc.problems)
-                summary = ""
-        problems.sort(key=lambda p: (p.file, p.line, p.column))
-        for problem in problems:
-            print(problem, file=sys.stderr)
-        if any(p.severity == "error" for p in problems):
-            failed = True
-        else:
-            warn = f", {len(problems)} warning{'s' * (len(problems) != 1)}" if problems else ""
-            print(summary + warn)
-    # the exit-code rule of docs/cli.md: a name that names nothing is a usage error (2)
-    return 2 if usage else 1 if failed else 0
+
+def _validate_one(arg: str) -> int:
+    """Print the problems of one rule file and its summary line; return its exit code (a
+    name that names nothing is a usage error, 2, as docs/cli.md says)."""
+    problems: list[Problem]
+    try:
+        rules = _load(arg)
+    except RuleFileError as exc:
+        problems = list(exc.problems)
+        summary = ""
+    except UsageError as exc:
+        print(f"tactile-kb validate: error: {exc}", file=sys.stderr)
+        return EXIT_USAGE
+    else:
+        # Feature bindings (against the registry, plugins included) and the logic are
+        # checked together, so that every problem is listed at once.
+        from tactile_kb.bindings import binding_problems
+        from tactile_kb.compiler import compile_rules
+
+        problems = binding_problems(rules, missing="warning")
+        try:
+            kb = compile_rules(rules)
+            problems += list(kb.problems)
+            summary = (
+                f"{kb.rules.file}: ok: {kb.n} propositions, {len(kb.classes)} classes, "
+                f"|r(L)| = {kb.r_count}"
+            )
+        except RuleFileError as exc:
+            problems += list(exc.problems)
+            summary = ""
+    problems.sort(key=lambda p: (p.file, p.line, p.column))
+    for problem in problems:
+        print(problem, file=sys.stderr)
+    if any(p.severity == "error" for p in problems):
+        return EXIT_FAILED
+    warn = f", {len(problems)} warning{'s' * (len(problems) != 1)}" if problems else ""
+    print(summary + warn)
+    return EXIT_OK
 
 
 def _bits_line(bits: tuple[str, ...]) -> str:
