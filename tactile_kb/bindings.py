@@ -42,7 +42,10 @@ def binding_problems(rules: RuleSet, *, missing: str = "error") -> list[Problem]
             bad = [k for k in prop.feature.params if f"parameter {k!r}" in message]
             if bad:
                 where = (*where, "params", bad[0])
-            problems.append(rules.problem(where, message))
+            if bad and "has no parameter" in message:  # at the unknown name
+                problems.append(rules.source.problem(where, message, key=True))
+            else:
+                problems.append(rules.problem(where, message))
     known = measure_names()
     for i, cls in enumerate(rules.classes):
         for k, name in enumerate(cls.report):

@@ -168,7 +168,7 @@ def test_validate_checks_feature_bindings_with_the_logic(
     err = capsys.readouterr().err.splitlines()
     assert (
         err[0]
-        == f"{path}:8:14: propositions[1].feature: feature 'face_count' has no parameter 'sides' (parameters: equals, max, min)"
+        == f"{path}:8:42: propositions[1].feature.params.sides: feature 'face_count' has no parameter 'sides' (parameters: equals, max, min)"
     )
     assert err[1].startswith(
         f"{path}:9:5: warning: propositions[2]: no feature decides proposition 'C'"
