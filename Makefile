@@ -8,15 +8,21 @@ PLUGIN_STAMP := $(VENV)/.installed-mujoco
 
 .PHONY: demo test lint typecheck docs bench gallery clean
 
+# pip's own output (each package as it is collected and installed) shows the progress.
 $(STAMP): pyproject.toml
-	test -x $(BIN)/python || $(PYTHON) -m venv $(VENV)
-	$(BIN)/python -m pip install --quiet --upgrade pip
-	$(BIN)/python -m pip install --quiet -e ".[dev]"
-	touch $(STAMP)
+	@test -x $(BIN)/python || { echo ">> creating the virtual environment $(VENV)"; $(PYTHON) -m venv $(VENV); }
+	@echo ">> installing tactile-kb into $(VENV) with its dependencies (numpy, scipy, sympy, dd,"
+	@echo ">> trimesh, matplotlib, ...) and the development tools (pytest, hypothesis, ruff, mypy,"
+	@echo ">> mkdocs): a few minutes the first time, seconds afterwards"
+	$(BIN)/python -m pip install --upgrade pip
+	$(BIN)/python -m pip install -e ".[dev]"
+	@touch $(STAMP)
+	@echo ">> installed; the next runs reuse $(VENV)"
 
 $(PLUGIN_STAMP): $(STAMP) explorers/mujoco/pyproject.toml
-	$(BIN)/python -m pip install --quiet -e ./explorers/mujoco
-	touch $(PLUGIN_STAMP)
+	@echo ">> installing the MuJoCo explorer plugin (mujoco) into $(VENV)"
+	$(BIN)/python -m pip install -e ./explorers/mujoco
+	@touch $(PLUGIN_STAMP)
 
 demo: $(STAMP)
 	$(BIN)/tactile-kb demo

@@ -14,6 +14,7 @@ each into one line and an exit code, never a traceback::
     ├── GeometryError               the touched planes give no model
     │   └── OpenModelError          the planes do not bound a region (names the open directions)
     ├── RecordError                 an exploration record that cannot be loaded
+    ├── OutputError                 an output file (a picture, a report) that cannot be written
     └── PluginError                 a plugin (explorer, feature extractor) is unknown or broken
         └── PluginUnavailableError  a plugin is known but cannot load; carries its install hint
 """
@@ -30,6 +31,7 @@ __all__ = [
     "LayoutFileError",
     "ObjectError",
     "OpenModelError",
+    "OutputError",
     "PluginError",
     "PluginUnavailableError",
     "Problem",
@@ -119,6 +121,10 @@ class OpenModelError(GeometryError):
 
 class RecordError(TactileKBError):
     """An exploration record that cannot be loaded."""
+
+
+class OutputError(TactileKBError):
+    """An output file (a picture, a report) that cannot be written; nothing is left half-written."""
 
 
 class PluginError(TactileKBError):

@@ -25,13 +25,14 @@ from tactile_kb.errors import UsageError
 
 if TYPE_CHECKING:
     import trimesh
+    from matplotlib.figure import Figure
 
 __all__ = ["GALLERY_DPI", "GALLERY_SIZE", "GalleryItem", "build_gallery", "gallery_items", "main"]
 
-GALLERY_SIZE = (5.0, 3.75)
-"""Inches: 400 × 300 pixels at :data:`GALLERY_DPI`."""
+GALLERY_SIZE = (8.0, 6.0)
+"""Inches: 800 × 600 pixels at :data:`GALLERY_DPI`, so that 9-point labels stay legible."""
 
-GALLERY_DPI = 80
+GALLERY_DPI = 100
 
 
 @dataclass(frozen=True)
@@ -94,8 +95,9 @@ def build_gallery(
         plan = plan_grasp(result.model)
         target = directory / f"{name.lower()}.png"
         fig = plot_classification(result, None, mesh=mesh, grasp=plan, size=size, dpi=dpi)
-        fig.suptitle(f"{name}: {result.decision.answer}", fontsize=8)
-        fig.savefig(target, format="png", dpi=dpi)
+        title = fig.texts[0].get_text().split("\n", 1)[1]  # the counts and the grasp
+        fig.texts[0].set_text(f"{name}: {result.answer}\n{title}")
+        _save_small_png(fig, target, dpi)
         written.append(target)
         if name == "CUBE1":
             cube_decision = result.decision
@@ -109,27 +111,49 @@ def build_gallery(
         plan = plan_grasp(model)
         target = directory / f"{name.lower()}-union.png"
         grasp = (
-            f"grasp {plan.best.width * 1000:.0f} mm, "
-            f"{plan.best.com_offset * 1000:.1f} mm from the centre of mass"
+            f"grasp on the layer contours: jaws {plan.best.width * 1000:.0f} mm apart, "
+            f"{plan.best.com_offset * 1000:.0f} mm from the centre of mass"
             if plan.best
             else f"no grasp: {plan.reason}"
         )
-        plot_exploration(
+        fig = plot_exploration(
             model,
-            target,
+            None,
             mesh=mesh,
             grasp=plan,
-            title=f"{name} box union, 4-sensor finger: {record.touches} touches\n{grasp}",
+            title=(
+                f"{name} box union, 4-sensor finger: {record.touches} touches, "
+                f"{len(record.contacts)} contacts\n{grasp}"
+            ),
             size=size,
             dpi=dpi,
         )
+        _save_small_png(fig, target, dpi)
         written.append(target)
         say(f"{target}: {record.touches} touches, {len(record.layers)} layers, {grasp}")
     target = directory / "tree-cube.png"
-    plot_tree(kb, target, decision=cube_decision, size=(size[0] * 1.6, size[1] * 1.4), dpi=dpi)
+    fig = plot_tree(kb, None, decision=cube_decision, size=(size[0] * 1.2, size[1] * 1.5), dpi=dpi)
+    _save_small_png(fig, target, dpi)
     written.append(target)
     say(f"{target}")
     return written
+
+
+def _save_small_png(fig: Figure, target: Path, dpi: float) -> None:
+    """Write ``fig`` as a PNG of at most 256 colours (a third of the bytes; the pictures are
+    flat colours), atomically."""
+    import io
+
+    from PIL import Image
+
+    from tactile_kb.files import atomic_write
+
+    buffer = io.BytesIO()
+    fig.savefig(buffer, format="png", dpi=dpi)
+    buffer.seek(0)
+    with Image.open(buffer) as image:
+        small = image.convert("RGB").quantize(colors=256, method=Image.Quantize.MEDIANCUT)
+        atomic_write(target, lambda f: small.save(f, format="PNG", optimize=True))
 
 
 def _print(text: str) -> None:

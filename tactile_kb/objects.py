@@ -193,5 +193,6 @@ def load_object(obj: ObjectLike, *, name: str | None = None) -> trimesh.Trimesh:
     if float(mesh.volume) < 0:
         mesh.invert()
     mesh.apply_translation((0.0, 0.0, -float(lo[2])))
+    mesh.metadata["moved_z"] = -float(lo[2])  # reported in the exploration's notes
     mesh.metadata["name"] = label
     return mesh

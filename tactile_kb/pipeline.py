@@ -27,8 +27,9 @@ from functools import lru_cache
 from pathlib import Path
 from typing import Any
 
-from tactile_kb.errors import Problem, RuleFileError, UsageError
-from tactile_kb.features.builtin import check_binding, get_feature, measure, measure_names
+from tactile_kb.bindings import binding_problems
+from tactile_kb.errors import RuleFileError, UsageError
+from tactile_kb.features.builtin import get_feature, measure, measure_names
 from tactile_kb.geometry.model import ObjectModel, build_model
 from tactile_kb.kb.base import KnowledgeBase
 from tactile_kb.kb.compiler import compile_rules
@@ -86,22 +87,31 @@ class Classification:
         return f"{self.decision.answer} ({extra})" if extra else self.decision.answer
 
     def summary(self) -> dict[str, Any]:
-        """The JSON line of ``tactile-kb classify --json``."""
+        """The JSON object of ``tactile-kb classify --json`` (one line per object).
+
+        Its schema is ``tactile_kb/schemas/classification.schema.json``: ``answer`` is the
+        bare answer and ``report`` the answer with the measures its class reports (as the
+        text output prints it); ``touches`` counts sensor OFF→ON events and ``contacts``
+        every contact recorded (touches and slides).
+        """
         return {
             "object": self.object,
             "answer": self.decision.answer,
+            "report": self.answer,
             "label": self.decision.label,
             "bits": self.decision.bits,
             "propositions": dict(self.decision.values),
-            "contacts": self.record.touches,
+            "touches": self.record.touches,
+            "contacts": len(self.record.contacts),
             "planes": self.planes,
             "path_length": round(self.record.path_length, 6),
             "seconds": round(self.seconds, 4),
             "phase": self.decision.phase,
-            "contacts_per_phase": dict(self.contacts_per_phase),
+            "touches_per_phase": dict(self.contacts_per_phase),
             "explanation": self.decision.explanation,
             "reported": self.reported,
             "measures": self.measures,
+            "notes": list(self.record.notes),
         }
 
 
@@ -138,43 +148,6 @@ def knowledge_base(rules: RulesLike) -> KnowledgeBase:
         kb = _compiled(str(p), p.stat().st_mtime_ns) if p.is_file() else compile_rules(ruleset)
     _check_bindings(kb.rules)
     return kb
-
-
-def binding_problems(rules: RuleSet, *, missing: str = "error") -> list[Problem]:
-    """Every proposition of ``rules`` whose feature binding is missing or wrong, located.
-
-    A rule file binds each proposition to a feature extractor by name with parameters; the
-    names are checked here against the feature registry (built-ins and plugins) and the
-    parameters against the extractor's signature. A proposition with no binding is reported
-    with severity ``missing``: an error for classifying objects, a warning for a rule file
-    used only for its logic (``tactile-kb compile``, ``query``).
-    """
-    problems = []
-    for i, prop in enumerate(rules.propositions):
-        if prop.feature is None:
-            problems.append(
-                rules.problem(
-                    ("propositions", i),
-                    f"no feature decides proposition {prop.id!r}, so objects cannot be "
-                    "classified with this file (add feature: NAME)",
-                    severity=missing,
-                )
-            )
-            continue
-        message = check_binding(prop.feature.name, prop.feature.params)
-        if message:
-            problems.append(rules.problem(("propositions", i, "feature"), message))
-    known = measure_names()
-    for i, cls in enumerate(rules.classes):
-        for k, name in enumerate(cls.report):
-            if name not in known:
-                problems.append(
-                    rules.problem(
-                        ("classes", i, "report", k),
-                        f"unknown measure {name!r} (known: {', '.join(known)})",
-                    )
-                )
-    return problems
 
 
 def _check_bindings(rules: RuleSet) -> None:

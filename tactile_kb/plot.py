@@ -23,7 +23,7 @@ Examples
 >>> from tactile_kb.touch.synthetic import sample_record
 >>> fig = plot_exploration(sample_record(box(0.1, 0.06, 0.04), builtin_finger("33"), seed=1))
 >>> [round(float(v)) for v in fig.get_size_inches() * fig.dpi]
-[640, 480]
+[800, 600]
 """
 
 from __future__ import annotations
@@ -42,7 +42,8 @@ from mpl_toolkits.mplot3d.art3d import (  # type: ignore[import-untyped]
     Poly3DCollection,
 )
 
-from tactile_kb.errors import UsageError
+from tactile_kb.errors import OutputError, UsageError
+from tactile_kb.files import atomic_write
 from tactile_kb.geometry.blocks import SectionSolid
 from tactile_kb.geometry.model import ObjectModel, build_model
 from tactile_kb.grasp.planner import GraspPlan
@@ -67,15 +68,19 @@ __all__ = [
 FORMATS = {".png": "png", ".svg": "svg", ".pdf": "pdf"}
 """File extensions :func:`save_figure` writes, and their formats."""
 
-DEFAULT_SIZE = (6.4, 4.8)
+DEFAULT_SIZE = (8.0, 6.0)
 DEFAULT_DPI = 100
 """The choice tree enumerates r(L) up to this many minterms; beyond, only the phases show."""
 TREE_LEAF_LIMIT = 48
 
-_TREE_RIGHT = 0.70  # x of the last phase column (axes fraction)
-_TREE_LEAF = 0.76  # x where the answers begin
-_LEAF_CHARS = 26
-_DISCRETE_SENSORS = 8  # up to this many sensors get legend entries instead of a colour bar
+_TREE_RIGHT = 0.66  # x of the last phase column (axes fraction)
+_TREE_LEAF = 0.70  # x where the answers begin
+_LEAF_CHARS = 34
+_LEAF_PT = 34.0  # vertical points one answer box needs (two lines of 9 pt and a gap)
+_FONT = 10  # axis labels and legends, points
+_TICK_FONT = 9  # tick labels, points
+_TITLE_FONT = 11
+_MAX_FACE_ENTRIES = 10  # faces beyond these share one legend entry
 _HIGHLIGHT = "#e66100"
 _MODEL = "#1f5fbf"
 _GRASP = "#c01c28"
@@ -96,10 +101,10 @@ def save_figure(fig: Figure, path: str | Path, *, dpi: float | None = None) -> P
         raise UsageError(f"{p}: cannot write a picture with suffix {p.suffix!r} (use {known})")
     if not p.parent.exists():
         raise UsageError(f"{p}: the directory {p.parent} does not exist")
-    try:
-        fig.savefig(p, format=fmt, dpi=dpi if dpi is not None else fig.dpi)
+    try:  # atomically: a failure or a kill leaves any earlier picture at ``p`` as it was
+        atomic_write(p, lambda f: fig.savefig(f, format=fmt, dpi=dpi or fig.dpi))
     except OSError as exc:
-        raise UsageError(f"{p}: cannot write the picture: {exc.strerror or exc}") from None
+        raise OutputError(f"{p}: cannot write the picture: {exc.strerror or exc}") from None
     return p
 
 
@@ -108,21 +113,13 @@ def save_figure(fig: Figure, path: str | Path, *, dpi: float | None = None) -> P
 # ---------------------------------------------------------------------------------------------
 
 
-def _sensor_of(record: ExplorationRecord) -> np.ndarray[Any, np.dtype[np.int64]]:
-    out = []
-    for c in record.contacts:
-        s = c.sensor if c.sensor >= 0 else (c.sensors[0] if c.sensors else 0)
-        out.append(s)
-    return np.asarray(out, dtype=np.int64)
-
-
 def _set_equal(ax: Any, points: np.ndarray[Any, np.dtype[np.float64]]) -> None:
     lo, hi = points.min(axis=0), points.max(axis=0)
     centre, half = (lo + hi) / 2.0, max(float((hi - lo).max()) / 2.0, 1e-3) * 1.05
     ax.set_xlim(centre[0] - half, centre[0] + half)
     ax.set_ylim(centre[1] - half, centre[1] + half)
     ax.set_zlim(max(centre[2] - half, lo[2] - 0.002), centre[2] + half)
-    ax.set_box_aspect((1.0, 1.0, 1.0), zoom=1.15)
+    ax.set_box_aspect((1.0, 1.0, 1.0), zoom=0.95)
 
 
 def _draw_3d(
@@ -149,58 +146,34 @@ def _draw_3d(
         extent.append(path)
     if record.contacts:
         pts = np.asarray([c.point for c in record.contacts], dtype=float)
-        sensors = _sensor_of(record)
-        count = max(len(record.sensor_directions), int(sensors.max()) + 1, 1)
-        norm = Normalize(0, max(count - 1, 1))
-        if count <= _DISCRETE_SENSORS:  # a few sensors: one legend entry each
-            from matplotlib import colormaps
-
-            cmap = colormaps["turbo"]
-            for k in sorted(set(sensors.tolist())):
-                sel = sensors == k
-                ax.scatter(
-                    pts[sel, 0],
-                    pts[sel, 1],
-                    pts[sel, 2],
-                    color=cmap(norm(k)),
-                    s=14,
-                    depthshade=False,
-                    label=f"sensor {k}",
-                )
-        else:
-            sc = ax.scatter(
-                pts[:, 0],
-                pts[:, 1],
-                pts[:, 2],
-                c=sensors,
-                cmap="turbo",
-                norm=norm,
-                s=14,
-                depthshade=False,
-                label="contacts",
-            )
-            pos = ax.get_position()
-            ax.set_position((pos.x0, pos.y0, pos.width * 0.84, pos.height))
-            x = pos.x0 + pos.width * 0.86 if layered else pos.x1 + 0.01
-            cax = fig.add_axes((x, pos.y0 + 0.3 * pos.height, 0.012, 0.4 * pos.height))
-            bar = fig.colorbar(sc, cax=cax, orientation="vertical")
-            bar.set_label("sensor that fired", fontsize=6, labelpad=1)
-            bar.ax.tick_params(labelsize=6)
+        _draw_contacts(ax, pts, model)
         extent.append(pts)
     poly = model.polyhedron if model is not None else None
     solid = grasp.solid if grasp is not None else None
     if poly is not None:
         segs = [poly.vertices[[i, j]] for i, j in poly.edges]
-        if model is not None and not model.convex:  # only the convex envelope of the object
+        curved = model is not None and _is_curved(model)
+        if model is not None and (not model.convex or curved):
+            # only an envelope: the object lies inside it, touching it where it was touched
+            what = "curved surface" if curved else "concave faces"
             ax.add_collection3d(
                 Line3DCollection(
-                    segs, colors=_MODEL, linewidths=0.6, linestyles="dashed", alpha=0.5
+                    segs, colors=_MODEL, linewidths=0.8, linestyles="dashed", alpha=0.6
                 )
             )
-            ax.plot([], [], [], color=_MODEL, lw=0.6, ls="--", alpha=0.5, label="convex envelope")
+            ax.plot(
+                [],
+                [],
+                [],
+                color=_MODEL,
+                lw=0.8,
+                ls="--",
+                alpha=0.6,
+                label=f"envelope of the touched planes\n({what}: the object lies inside)",
+            )
         else:
             ax.add_collection3d(Line3DCollection(segs, colors=_MODEL, linewidths=1.2))
-            ax.plot([], [], [], color=_MODEL, lw=1.2, label="polyhedron")
+            ax.plot([], [], [], color=_MODEL, lw=1.2, label="polyhedron (the model)")
         extent.append(np.asarray(poly.vertices, dtype=float))
     if solid is not None:
         segs = _block_edges(solid)
@@ -216,18 +189,92 @@ def _draw_3d(
         for q, m in zip(p, n, strict=True):
             start = q + jaw * m
             ax.quiver(*start, *(-jaw * m), color=_GRASP, lw=2.0, arrow_length_ratio=0.3)
-        ax.plot([], [], [], color=_GRASP, lw=1.5, label="grasp")
+        ax.plot([], [], [], color=_GRASP, lw=1.5, label="grasp (jaws and their line)")
         if grasp.com is not None:
             c = np.asarray(grasp.com)
-            ax.scatter([c[0]], [c[1]], [c[2]], color="k", marker="x", s=30, depthshade=False)
+            ax.scatter(
+                [c[0]],
+                [c[1]],
+                [c[2]],
+                color="k",
+                marker="x",
+                s=40,
+                depthshade=False,
+                label="centre of mass",
+            )
     if extent:
         _set_equal(ax, np.vstack(extent))
-    ax.set_xlabel("x (m)", fontsize=7, labelpad=-2)
-    ax.set_ylabel("y (m)", fontsize=7, labelpad=-2)
-    ax.set_zlabel("z (m)", fontsize=7, labelpad=-2)
-    ax.tick_params(labelsize=5, pad=0)
-    if ax.get_legend_handles_labels()[0]:  # an empty record draws nothing to name
-        ax.legend(loc="upper left", fontsize=6, frameon=False)
+    for axis in "xyz":
+        getattr(ax, f"set_{axis}label")(f"{axis} (mm)", fontsize=_FONT, labelpad=6)
+    _millimetres(ax)
+    ax.tick_params(labelsize=_TICK_FONT, pad=1)
+
+
+def _millimetres(ax: Any) -> None:
+    """Tick labels in millimetres (the data stay in metres), a few per axis."""
+    from matplotlib.ticker import FuncFormatter, MaxNLocator
+
+    fmt = FuncFormatter(lambda v, _pos: f"{v * 1000:.0f}")
+    for axis in (ax.xaxis, ax.yaxis, *((ax.zaxis,) if hasattr(ax, "zaxis") else ())):
+        axis.set_major_locator(MaxNLocator(4))
+        axis.set_major_formatter(fmt)
+
+
+def _is_curved(model: ObjectModel) -> bool:
+    """What the ``surface_curved`` feature says of the model (False when it cannot say)."""
+    from tactile_kb.features.builtin import get_feature
+
+    try:
+        return bool(get_feature("surface_curved").fn(model))
+    except Exception:  # a model the feature cannot judge is drawn as it is
+        return False
+
+
+def _facing(normal: Sequence[float]) -> str:
+    """A few words for a face's outward normal: top, bottom, or the side it faces."""
+    x, y, z = (float(v) for v in normal)
+    if z > 0.9:
+        return "top"
+    if z < -0.9:
+        return "bottom"
+    names = ["+x", "+x+y", "+y", "−x+y", "−x", "−x−y", "−y", "+x−y"]
+    side = names[round(float(np.degrees(np.arctan2(y, x))) / 45.0) % 8]
+    tilt = "" if abs(z) < 0.26 else (", up" if z > 0 else ", down")
+    return f"{side}{tilt}"
+
+
+def _draw_contacts(
+    ax: Any, pts: np.ndarray[Any, np.dtype[np.float64]], model: ObjectModel | None
+) -> None:
+    """Contact points coloured by the face (fitted plane) they were assigned to, with a legend
+    entry per face; contacts on no face are grey."""
+    from matplotlib import colormaps
+
+    faces = [] if model is None else [f for f in model.faces if f.source == "contacts"]
+    owner = np.full(len(pts), -1)
+    for k, face in enumerate(faces):
+        idx = [i for i in face.contacts if 0 <= i < len(pts)]
+        owner[idx] = k
+    cmap = colormaps["tab10"]
+    order = sorted(range(len(faces)), key=lambda k: -len(faces[k].contacts))
+    for rank, k in enumerate(order):
+        sel = owner == k
+        if not sel.any():
+            continue
+        many = rank >= _MAX_FACE_ENTRIES
+        label = None if many else f"face {rank + 1}: {_facing(faces[k].normal)} ({int(sel.sum())})"
+        colour = "0.35" if many else cmap(rank % 10)
+        ax.scatter(*pts[sel].T, color=colour, s=10, depthshade=False, label=label)
+    rest = owner == -1
+    if len(faces) > _MAX_FACE_ENTRIES:
+        ax.scatter(
+            [], [], [], color="0.35", s=10, label=f"{len(faces) - _MAX_FACE_ENTRIES} more faces"
+        )
+    if rest.any():
+        what = "contacts" if not faces else "on no face"
+        ax.scatter(
+            *pts[rest].T, color="0.6", s=8, depthshade=False, label=f"{what} ({int(rest.sum())})"
+        )
 
 
 def _block_edges(solid: SectionSolid) -> list[np.ndarray[Any, np.dtype[np.float64]]]:
@@ -271,12 +318,19 @@ def _draw_layers(ax: Any, model: ObjectModel, grasp: GraspPlan | None = None) ->
     if grasp is not None and grasp.com is not None:
         ax.plot([grasp.com[0]], [grasp.com[1]], "kx", ms=5, label="centre of mass")
     ax.set_aspect("equal", adjustable="datalim")
-    ax.set_title("layer contours", fontsize=8)
-    ax.set_xlabel("x (m)", fontsize=7)
-    ax.set_ylabel("y (m)", fontsize=7)
-    ax.tick_params(labelsize=6)
-    if layers:
-        ax.legend(fontsize=6, frameon=False, loc="best")
+    ax.set_title("layer contours, seen from above", fontsize=_FONT)
+    ax.set_xlabel("x (mm)", fontsize=_FONT)
+    ax.set_ylabel("y (mm)", fontsize=_FONT)
+    _millimetres(ax)
+    ax.tick_params(labelsize=_TICK_FONT)
+    if layers:  # below the panel, never over the contours
+        ax.legend(
+            fontsize=_FONT - 1,
+            frameon=False,
+            loc="upper center",
+            bbox_to_anchor=(0.5, -0.16),
+            ncol=1,
+        )
 
 
 def plot_exploration(
@@ -328,37 +382,69 @@ def plot_exploration(
     layered = any(len(lay.contour) >= 3 for lay in model.layers) and (
         model.polyhedron is None or not model.convex
     )
-    if layered:
-        grid = fig.add_gridspec(1, 2, width_ratios=(1.35, 1.0), wspace=0.4, top=0.8)
-        ax3 = fig.add_subplot(grid[0, 0], projection="3d")
-        ax2 = fig.add_subplot(grid[0, 1])
+    if layered:  # the 3-D view and the layer contours side by side, each legend below its view
+        ax3 = fig.add_axes((0.0, 0.30, 0.52, 0.56), projection="3d")
+        ax2 = fig.add_axes((0.62, 0.40, 0.35, 0.44))
         _draw_layers(ax2, model, plan)
-    else:
-        ax3 = fig.add_subplot(1, 1, 1, projection="3d")
+    else:  # the 3-D view, its legend on the right
+        ax3 = fig.add_axes((0.0, 0.02, 0.56, 0.82), projection="3d")
     _draw_3d(ax3, record, model, mesh, plan, fig, layered)
+    handles, labels = ax3.get_legend_handles_labels()
+    if handles:  # an empty record draws nothing to name
+        where: dict[str, Any] = (
+            {"loc": "upper center", "ncol": 2, "bbox_to_anchor": (0.27, 0.255)}
+            if layered
+            else {"loc": "center left", "ncol": 1, "bbox_to_anchor": (0.58, 0.45)}
+        )
+        fig.legend(
+            handles,
+            labels,
+            fontsize=_FONT - 1,
+            frameon=False,
+            title="(n): contacts on the face" if any(": " in x for x in labels) else None,
+            title_fontsize=_FONT - 1,
+            columnspacing=1.0,
+            **where,
+        )
     if title is None:
-        if model.polyhedron is None and model.layers:
-            found = f"{len(model.layers)} layers"
-        else:
-            found = f"{len(model.polyhedron.faces) if model.polyhedron is not None else 0} faces"
-        title = f"{record.object or 'object'}: {record.touches} touches, {found}"
+        title = f"{record.object or 'object'}\n{_counts(model)}"
         if plan is not None:
-            title += (
-                f"\ngrasp {plan.best.width * 1000:.0f} mm, ε = {plan.best.quality:.3f}"
-                if plan.best is not None
-                else f"\nno grasp: {plan.reason}"
-            )
-            if plan.best is not None and plan.basis == "sections":
-                title += " (on the layer contours)"
-    fig.suptitle(_wrap(title, size[0]), fontsize=8)
+            title += "\n" + _grasp_line(plan)
+    fig.suptitle(_wrap(title, size[0]), fontsize=_TITLE_FONT)
     if path is not None:
         save_figure(fig, path)
     return fig
 
 
+def _counts(model: ObjectModel) -> str:
+    """``9 touches, 139 contacts, 6 faces``: what the finger did and what it found."""
+    record = model.record
+    if model.polyhedron is None and model.layers:
+        found = f"{len(model.layers)} layer contours"
+    else:
+        n = len(model.polyhedron.faces) if model.polyhedron is not None else 0
+        found = f"{n} face{'s' * (n != 1)} in the model"
+    return (
+        f"{record.touches} touches (a sensor closing), {len(record.contacts)} contacts "
+        f"recorded, {found}"
+    )
+
+
+def _grasp_line(plan: GraspPlan) -> str:
+    b = plan.best
+    if b is None:
+        return f"no grasp: {plan.reason}"
+    force = "cannot hold it" if b.least_force is None else f"least force {b.least_force:.1f} N"
+    where = " on the layer contours" if plan.basis == "sections" else ""
+    return (
+        f"grasp{where}: jaws {b.width * 1000:.0f} mm apart, "
+        f"{b.com_offset * 1000:.0f} mm from the centre of mass, {force}"
+    )
+
+
 def _wrap(text: str, width_in: float) -> str:
-    """Wrap each line of a title to the figure's width (about 15 characters per inch at 8 pt)."""
-    chars = max(int(width_in * 15), 20)
+    """Wrap each line of a title to the figure's width (about 11 characters per inch at 11 pt)."""
+    chars = max(int(width_in * 11), 20)
     return "\n".join(textwrap.fill(line, chars) for line in text.splitlines())
 
 
@@ -381,8 +467,15 @@ def plot_classification(
     if not isinstance(model, ObjectModel) or decision is None:
         raise UsageError("plot_classification needs a classification result (model, decision)")
     answer = getattr(result, "answer", decision.answer)  # with its reported measures
-    title = f"{getattr(result, 'object', '') or model.record.object}: {answer}"
-    title += f"  [{decision.bits}]"
+    name = getattr(result, "object", "") or model.record.object
+    title = f"{name}: {answer}\n{_counts(model)}"
+    if isinstance(grasp, GraspPlan):
+        title += "\n" + _grasp_line(grasp)
+    elif grasp is True:
+        from tactile_kb.grasp.planner import plan_grasp
+
+        grasp = plan_grasp(model)
+        title += "\n" + _grasp_line(grasp)
     fig = plot_exploration(model, None, mesh=mesh, grasp=grasp, title=title, size=size, dpi=dpi)
     if path is not None:
         save_figure(fig, path)
@@ -441,12 +534,15 @@ def plot_tree(
     phases = kb.rules.phases
     ncol = len(phases) + 1
     root = choice_tree(kb)
-    if root is not None and root.leaves > TREE_LEAF_LIMIT:
-        root = None
+    collapsed = False
+    fit = max(6, int(0.84 * size[1] * 72.0 / _LEAF_PT))  # leaves that fit, legibly
+    if root is not None and root.leaves > fit:
+        root = _collapse(root, values if decision is not None else None, fit)
+        collapsed = True
     xs = np.linspace(0.03, _TREE_RIGHT, ncol)
     # phase headers: the paper's "classification carried out in phases"
     column_pt = (xs[1] - xs[0]) * 0.98 * size[0] * 72.0
-    head_font = float(np.clip(column_pt / 8.0, 4.5, 7.0))
+    head_font = float(np.clip(column_pt / 7.0, 6.5, 9.0))
     chars = max(int(column_pt / (0.55 * head_font)), 4)
     for k, ph in enumerate(phases):
         props = ", ".join(ph.propositions)
@@ -460,13 +556,19 @@ def plot_tree(
             fontsize=head_font,
             color="0.25",
         )
-    ax.text(_TREE_LEAF + 0.01, 1.0, "answer", ha="left", va="top", fontsize=7, color="0.25")
+    ax.text(_TREE_LEAF + 0.01, 1.0, "answer", ha="left", va="top", fontsize=9, color="0.25")
     ax.set_xlim(0, 1)
     ax.set_ylim(-0.02, 1.02)
     title = f"choice tree of {kb.rules.name}"
     if decision is not None:
-        title += f": {decision.answer}"
-    fig.suptitle(title, fontsize=9)
+        title += f": {decision.answer} (bits {decision.bits}, the highlighted path)"
+    if collapsed:
+        title += (
+            "\nbranches off the path folded: each grey box lists the answers below it"
+            if decision is not None
+            else "\nthe deeper branches folded: each grey box lists the answers below it"
+        )
+    fig.suptitle(title, fontsize=_TITLE_FONT)
     if root is None:
         _phase_summary(ax, kb, xs, values)
     else:
@@ -474,6 +576,68 @@ def plot_tree(
     if path is not None:
         save_figure(fig, path)
     return fig
+
+
+def _answers_below(node: TreeNode) -> list[str]:
+    if not node.children:
+        return [node.answer] if node.answer else []
+    out: list[str] = []
+    for child in node.children:
+        out += [a for a in _answers_below(child) if a not in out]
+    return out
+
+
+def _folded(node: TreeNode) -> TreeNode:
+    """A leaf standing for ``node``'s subtree, listing the answers below it."""
+    answers = _answers_below(node)
+    if len(answers) == 1 and node.leaves == 1:
+        return node
+    shown = "; ".join(a.removeprefix("OBJECT IS ").lower() for a in answers[:2])
+    more = f"; +{len(answers) - 2} more" if len(answers) > 2 else ""
+    return TreeNode(
+        phase=node.phase,
+        values=node.values,
+        label="folded",
+        answer=f"({node.leaves} cases) {shown}{more}",
+        count=node.count,
+    )
+
+
+def _collapse(root: TreeNode, values: Mapping[str, bool | None] | None, limit: int) -> TreeNode:
+    """A copy of the tree small enough to read: with ``values``, the branches off the path
+    they take are folded into one leaf each; without, the tree is unfolded level by level
+    while it has at most ``limit`` leaves."""
+    if values is not None:
+
+        def keep(node: TreeNode) -> TreeNode:
+            kids = [keep(c) if _on_path(c, values) else _folded(c) for c in node.children]
+            return TreeNode(node.phase, node.values, kids, node.label, node.answer, node.count)
+
+        return keep(root)
+    # Unfold the biggest folded branch (most members of r(L)) while the tree still fits.
+    opened: set[int] = {id(root)}
+    blocked: set[int] = set()
+
+    def build(node: TreeNode) -> TreeNode:
+        if id(node) not in opened:
+            return _folded(node)
+        kids = [build(c) for c in node.children]
+        return TreeNode(node.phase, node.values, kids, node.label, node.answer, node.count)
+
+    def folded_nodes(node: TreeNode) -> list[TreeNode]:
+        if id(node) not in opened:
+            return [node] if node.children and id(node) not in blocked else []
+        return [f for c in node.children for f in folded_nodes(c)]
+
+    while True:
+        candidates = sorted(folded_nodes(root), key=lambda n: -n.count)
+        if not candidates:
+            return build(root)
+        best = candidates[0]
+        opened.add(id(best))
+        if build(root).leaves > limit:
+            opened.discard(id(best))
+            blocked.add(id(best))
 
 
 def _draw_tree(
@@ -492,7 +656,7 @@ def _draw_tree(
     # leaves: two lines of _LEAF_CHARS characters in the right-hand column
     width_pt = (1.0 - _TREE_LEAF - 0.01) * 0.98 * size[0] * 72.0
     height_pt = (top - bottom) * 0.9 * size[1] * 72.0 / n_leaves
-    font = float(np.clip(min(width_pt / (0.6 * _LEAF_CHARS), height_pt / 2.8), 3.5, 8.0))
+    font = float(np.clip(min(width_pt / (0.6 * _LEAF_CHARS), height_pt / 3.0), 6.0, 9.0))
 
     def place(node: TreeNode) -> float:
         if not node.children:
@@ -526,17 +690,21 @@ def _draw_tree(
             draw(child, child_hot)
         if not node.children:
             label_hot = hot and decision is not None and node.label == decision.label
+            folded = node.label == "folded"
             ax.text(
                 x_leaf + 0.01,
                 node.y,
-                textwrap.fill(node.answer, _LEAF_CHARS),
+                textwrap.fill(
+                    textwrap.shorten(node.answer, 2 * _LEAF_CHARS - 2, placeholder=" …"),
+                    _LEAF_CHARS,
+                ),
                 ha="left",
                 va="center",
                 fontsize=font,
                 color="k",
                 bbox={
                     "boxstyle": "round,pad=0.25",
-                    "fc": "#fde2cf" if label_hot else "#eef2f8",
+                    "fc": "#fde2cf" if label_hot else "0.93" if folded else "#eef2f8",
                     "ec": _HIGHLIGHT if label_hot else "0.6",
                     "lw": 1.6 if label_hot else 0.5,
                 },

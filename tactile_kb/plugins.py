@@ -1,7 +1,7 @@
 """Name → implementation registries with lazy loading, entry points and install hints.
 
 Explorers (group ``tactile_kb.explorers``) and feature extractors (group
-``tactile_kb.features``) are found the same way: third parties declare an entry point in their
+``tactile_kb.features.builtin``) are found the same way: third parties declare an entry point in their
 ``pyproject.toml``, and the built-ins register through the very same mechanism. An entry point
 names one plugin, or a *provider*: a mapping ``{name: plugin}`` that contributes several.
 

@@ -27,6 +27,7 @@ import numpy as np
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_validator
 
 from tactile_kb.errors import RecordError
+from tactile_kb.files import MAX_RECORD_BYTES, InputFileError, atomic_write, read_text
 from tactile_kb.types import Vec3
 
 __all__ = [
@@ -166,6 +167,8 @@ class ExplorationRecord(BaseModel):
             data = json.loads(text)
         except json.JSONDecodeError as exc:
             raise RecordError(f"{file}:{exc.lineno}:{exc.colno}: not JSON: {exc.msg}") from None
+        except RecursionError:
+            raise RecordError(f"{file}: not an exploration record (nested too deeply)") from None
         if not isinstance(data, dict):
             raise RecordError(f"{file}: not an exploration record (expected a JSON object)")
         try:
@@ -186,33 +189,33 @@ class ExplorationRecord(BaseModel):
         return rec
 
     def save(self, path: str | Path) -> None:
-        """Write the record to ``path`` atomically (a temporary file, then a rename).
+        """Write the record to ``path`` atomically (see :func:`tactile_kb.files.atomic_write`).
 
         Nothing is left half-written: a failure raises :class:`RecordError` naming the path
         and leaves any earlier file at ``path`` as it was. A path that exists and is not a
         regular file (a directory, a device) is refused.
         """
         p = Path(path)
+        if not str(path) or not p.name:
+            raise RecordError(f"{str(path)!r}: give a file name for the record")
         if p.exists() and not p.is_file():
             raise RecordError(f"{p}: not a regular file; give a file name for the record")
-        if not p.name:
-            raise RecordError(f"{path}: give a file name for the record")
-        tmp = p.with_name(p.name + ".tmp")
+        data = self.to_json(indent=1).encode("utf-8")
         try:
-            tmp.write_text(self.to_json(indent=1), encoding="utf-8")
-            tmp.replace(p)
+            atomic_write(p, lambda f: f.write(data))
         except OSError as exc:
-            tmp.unlink(missing_ok=True)
             raise RecordError(f"{p}: cannot write: {exc.strerror or exc}") from None
 
     @classmethod
     def load(cls, path: str | Path) -> ExplorationRecord:
-        """Read a record saved by :meth:`save`."""
+        """Read a record saved by :meth:`save` (a regular file of at most
+        :data:`~tactile_kb.files.MAX_RECORD_BYTES`)."""
         p = Path(path)
+        if not str(path):
+            raise RecordError("'': give a record file name")
         try:
-            text = p.read_text(encoding="utf-8")
-        except OSError as exc:
-            raise RecordError(f"{p}: cannot read: {exc.strerror or exc}") from None
-        except UnicodeDecodeError as exc:
-            raise RecordError(f"{p}: not a record (not UTF-8 text: {exc.reason})") from None
+            text = read_text(p, max_bytes=MAX_RECORD_BYTES)
+        except InputFileError as exc:
+            where = f"{p}:{exc.line}:{exc.column}" if exc.line else str(p)
+            raise RecordError(f"{where}: {exc.message}") from None
         return cls.from_json(text, file=str(p))

@@ -28,8 +28,9 @@ import yaml
 from pydantic import BaseModel, ValidationError
 
 from tactile_kb.errors import Problem, SourceError
+from tactile_kb.files import MAX_YAML_BYTES, InputFileError, read_text
 
-__all__ = ["Source", "format_path", "load_yaml", "render_excerpt", "validate"]
+__all__ = ["MAX_DEPTH", "Source", "format_path", "load_yaml", "render_excerpt", "validate"]
 
 PathT = tuple[str | int, ...]
 M = TypeVar("M", bound=BaseModel)
@@ -151,47 +152,45 @@ def render_excerpt(text: str, line: int, column: int, context: int = 1) -> str:
     return "\n".join(out)
 
 
+MAX_DEPTH = 64
+"""The deepest nesting of lists and mappings a YAML source may have (rule files use 5)."""
+
+
 def load_yaml(
     source: str | Path,
     *,
     file: str | None = None,
     error_cls: type[SourceError] = SourceError,
     keep_going: bool = False,
+    max_bytes: int = MAX_YAML_BYTES,
 ) -> Source:
     """Compose YAML from a path or from text and return a :class:`Source`.
 
-    A ``Path`` is read from disk; a ``str`` is YAML text (name it with ``file``). Syntax errors
-    raise ``error_cls``. Duplicate keys, merge keys and non-scalar keys raise ``error_cls``
-    listing every one, or with ``keep_going=True`` are returned in :attr:`Source.problems` (the
-    first occurrence of a duplicated key is kept) so that a caller can report them together
-    with its own validation problems.
+    A ``Path`` is read from disk (a regular file of at most ``max_bytes``); a ``str`` is YAML
+    text (name it with ``file``). Syntax errors, anchors and aliases (``&a``, ``*a``: refused,
+    so that an alias bomb cannot expand), nesting deeper than :data:`MAX_DEPTH` and text that
+    is not UTF-8 raise ``error_cls`` with one located problem. Duplicate keys, merge keys and
+    non-scalar keys raise ``error_cls`` listing every one, or with ``keep_going=True`` are
+    returned in :attr:`Source.problems` (the first occurrence of a duplicated key is kept) so
+    that a caller can report them together with its own validation problems.
     """
     if isinstance(source, Path):
         name = file or str(source)
         try:
-            text = source.read_text(encoding="utf-8")
-        except OSError as exc:
-            raise error_cls(
-                [Problem(name, 0, 0, "", f"cannot read: {exc.strerror or exc}")]
-            ) from None
-        except UnicodeDecodeError as exc:
-            raise error_cls([Problem(name, 0, 0, "", f"not UTF-8 text: {exc.reason}")]) from None
+            text = read_text(source, max_bytes=max_bytes)
+        except InputFileError as exc:
+            raise error_cls([Problem(name, exc.line, exc.column, "", exc.message)]) from None
     else:
         name, text = file or "<string>", source
+        if len(text) > max_bytes:
+            raise error_cls([Problem(name, 0, 0, "", f"text too large ({len(text)} characters)")])
+    problem = _check_events(text, name)
+    if problem is not None:
+        raise error_cls([problem], render_excerpt(text, problem.line, problem.column))
     try:
-        try:
-            node = yaml.compose(text, Loader=_Core12Loader)
-        except yaml.MarkedYAMLError:
-            node = yaml.compose(text, Loader=_Core12PyLoader)  # raises with the clearer message
-    except yaml.MarkedYAMLError as exc:
-        mark = exc.problem_mark or exc.context_mark
-        line, col = (mark.line + 1, mark.column + 1) if mark else (0, 0)
-        msg = f"YAML syntax error: {exc.problem or exc.context}"
-        raise error_cls(
-            [Problem(name, line, col, "", msg)], render_excerpt(text, line, col)
-        ) from None
-    except yaml.YAMLError as exc:  # pragma: no cover - composer errors are all marked
-        raise error_cls([Problem(name, 0, 0, "", f"YAML error: {exc}")]) from None
+        node = yaml.compose(text, Loader=_Core12Loader)
+    except yaml.YAMLError as exc:  # pragma: no cover - the event pass found every syntax error
+        raise error_cls([Problem(name, 0, 0, "", f"YAML error: {_one_line(str(exc))}")]) from None
     builder = _Builder(name)
     data = None if node is None else builder.build(node, ())
     if builder.problems and not keep_going:
@@ -206,6 +205,128 @@ def load_yaml(
         builder.offsets,
         tuple(builder.problems),
     )
+
+
+def _one_line(text: str) -> str:
+    return " ".join(text.split())
+
+
+def _line_col(text: str, index: int) -> tuple[int, int]:
+    """1-based line and column of character ``index`` of ``text``."""
+    before = text[:index]
+    return before.count("\n") + 1, index - (before.rfind("\n") + 1) + 1
+
+
+def _check_events(text: str, name: str) -> Problem | None:
+    """The first syntax error, anchor, alias or too-deep nesting of ``text``, located.
+
+    The event stream is read without building anything (libyaml's parser keeps its own
+    stack), so an alias bomb or a file nested 30 000 deep costs no more than its size.
+    """
+    depth = 0
+    try:
+        for event in yaml.parse(text, Loader=_Core12Loader):
+            if isinstance(event, yaml.AliasEvent):
+                line, col = _mark(event.start_mark)
+                return Problem(name, line, col, "", f"aliases (*{event.anchor}) are not supported")
+            if isinstance(event, yaml.NodeEvent) and event.anchor is not None:
+                line, col = _mark(event.start_mark)
+                return Problem(name, line, col, "", f"anchors (&{event.anchor}) are not supported")
+            if isinstance(event, yaml.CollectionStartEvent):
+                depth += 1
+                if depth > MAX_DEPTH:
+                    line, col = _mark(event.start_mark)
+                    return Problem(name, line, col, "", f"nested more than {MAX_DEPTH} levels deep")
+            elif isinstance(event, yaml.CollectionEndEvent):
+                depth -= 1
+    except yaml.reader.ReaderError as exc:
+        line, col = _line_col(text, exc.position)
+        what = f"U+{exc.character:04X}" if isinstance(exc.character, int) else repr(exc.character)
+        return Problem(name, line, col, "", f"control character {what} is not allowed in YAML")
+    except yaml.MarkedYAMLError as exc:
+        return _syntax_problem(text, name, exc)
+    return None
+
+
+def _mark(mark: Any) -> tuple[int, int]:
+    return (mark.line + 1, mark.column + 1) if mark is not None else (0, 0)
+
+
+def _syntax_problem(text: str, name: str, exc: yaml.MarkedYAMLError) -> Problem:
+    """One located problem for a YAML syntax error, at the construct that was left open.
+
+    libyaml reports where parsing stopped; for an unclosed ``[``, ``{`` or quote, or an unknown
+    directive, that is far from the mistake, so the construct's own start is given instead.
+    """
+    context = exc.context or ""
+    problem = exc.problem or context
+    # The pure-Python parser's message names the token it found; take it where both agree.
+    try:
+        for _ in yaml.parse(text, Loader=_Core12PyLoader):
+            pass
+    except yaml.MarkedYAMLError as py_exc:
+        if _mark(py_exc.problem_mark) == _mark(exc.problem_mark) and py_exc.problem:
+            problem = py_exc.problem
+    except yaml.YAMLError:  # pragma: no cover - both parsers read the same characters
+        pass
+    at = _mark(exc.problem_mark)
+    where = f"line {at[0]}, column {at[1]}"
+    if context.startswith("while parsing a flow") and exc.context_mark is not None:
+        opener = "[" if "sequence" in context else "{"
+        line, col = _mark(exc.context_mark)
+        return Problem(
+            name,
+            line,
+            col,
+            "",
+            f"YAML syntax error: this {opener} is not closed ({problem} at {where})",
+        )
+    if context.startswith("while scanning a quoted scalar") and exc.context_mark is not None:
+        line, col = _mark(exc.context_mark)
+        return Problem(
+            name, line, col, "", f"YAML syntax error: this quoted string is not closed ({problem})"
+        )
+    if context.startswith("while scanning a directive") and exc.context_mark is not None:
+        line, col = _mark(exc.context_mark)
+        return Problem(
+            name, line, col, "", f"YAML syntax error: {problem} (a line starting with %)"
+        )
+    opened = _open_quote_before(text, at)
+    if opened is not None:
+        line, col = opened
+        return Problem(
+            name,
+            line,
+            col,
+            "",
+            f"YAML syntax error: this quoted string runs on to line {at[0]}; "
+            "is its closing quote missing?",
+        )
+    return Problem(name, at[0], at[1], "", f"YAML syntax error: {problem}")
+
+
+def _open_quote_before(text: str, at: tuple[int, int]) -> tuple[int, int] | None:
+    """The start of a quoted scalar spanning several lines that ends just before ``at``.
+
+    A quote left open swallows the lines after it up to the next quote character, and the
+    parser stops there: the quote that was opened is the mistake.
+    """
+    last: Any = None
+    try:
+        for token in yaml.scan(text, Loader=_Core12PyLoader):
+            if _mark(token.start_mark) >= at:
+                break
+            last = token
+    except yaml.YAMLError:
+        pass
+    if (
+        isinstance(last, yaml.ScalarToken)
+        and last.style in ("'", '"')
+        and last.end_mark.line > last.start_mark.line
+        and last.end_mark.line + 1 == at[0]
+    ):
+        return _mark(last.start_mark)
+    return None
 
 
 class _Builder:
@@ -225,8 +346,6 @@ class _Builder:
 
     def build(self, node: yaml.Node, path: PathT) -> Any:
         self.positions[path] = self._where(node)
-        if node.anchor if hasattr(node, "anchor") else False:  # pragma: no cover - defensive
-            self._problem(node, path, "anchors and aliases are not supported")
         if isinstance(node, yaml.MappingNode):
             out: dict[str, Any] = {}
             for key_node, value_node in node.value:

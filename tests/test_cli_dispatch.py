@@ -8,6 +8,7 @@ from typing import Any
 import pytest
 
 from tactile_kb import cli
+from tactile_kb.cli.options import BUG_HINT, error_message
 from tactile_kb.errors import Problem, RuleFileError, TactileKBError, UsageError
 
 
@@ -40,9 +41,14 @@ def _run_with(func: Any, monkeypatch: pytest.MonkeyPatch) -> int:
 @pytest.mark.parametrize(
     ("exc", "code", "line"),
     [
-        (UsageError("bad --seed"), 2, "tactile-kb: error: bad --seed\n"),
-        (TactileKBError("object is open"), 1, "tactile-kb: error: object is open\n"),
-        (ValueError("oops"), 3, "tactile-kb: internal error: ValueError: oops\n"),
+        (UsageError("bad --seed"), 2, "tactile-kb boom: error: bad --seed\n"),
+        (TactileKBError("object is open"), 1, "tactile-kb boom: error: object is open\n"),
+        (
+            ValueError("oops"),
+            3,
+            f"tactile-kb boom: internal error: ValueError: oops ({BUG_HINT})\n",
+        ),
+        (MemoryError(), 1, f"tactile-kb boom: error: {error_message(MemoryError())}\n"),
         (
             RuleFileError([Problem("r.yaml", 3, 5, "classes[0].when", "unknown id 'Q'")]),
             1,

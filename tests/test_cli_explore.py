@@ -180,7 +180,9 @@ def test_record_that_is_not_text_is_one_line(
     bad.write_bytes(b"\xff\xfe\x00garbage")
     assert main(["classify", "--record", str(bad)]) == 1
     err = capsys.readouterr().err.strip().splitlines()
-    assert err == [f"tactile-kb: error: {bad}: not a record (not UTF-8 text: invalid start byte)"]
+    assert err == [
+        f"tactile-kb classify: error: {bad}:1:1: not UTF-8 text: byte 0xff cannot be decoded"
+    ]
 
 
 def test_pictures_of_objects_with_the_same_name_do_not_overwrite_each_other(

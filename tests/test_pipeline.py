@@ -43,7 +43,10 @@ def test_summary_has_the_documented_keys() -> None:
         "label",
         "bits",
         "propositions",
+        "touches",
         "contacts",
+        "report",
+        "measures",
         "planes",
         "path_length",
         "seconds",
@@ -51,7 +54,9 @@ def test_summary_has_the_documented_keys() -> None:
         assert key in s
     assert s["label"] == "rectangular_parallelepiped"
     assert s["planes"] == 6  # five touched faces and the table
-    assert s["contacts"] == result.record.touches > 0
+    assert s["touches"] == result.record.touches > 0
+    assert s["contacts"] == len(result.record.contacts) >= s["touches"]
+    assert s["report"] == result.answer
     assert s["path_length"] > 0
     assert set(s["propositions"]) == set(knowledge_base("parallelepipeds").ids)
 

@@ -7,6 +7,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 from matplotlib.colors import to_hex
+from matplotlib.figure import Figure
 from PIL import Image
 
 from tactile_kb.errors import UsageError
@@ -90,7 +91,7 @@ def test_layers_panel_for_box_unions(tmp_path: Path) -> None:
     record = get_explorer("stepper").explore(mesh, finger="4", seed=0)
     fig = plot_exploration(record, tmp_path / "l.png", mesh=mesh, size=(6.0, 3.0), dpi=60)
     assert len([ax for ax in fig.axes if ax.name != "3d"]) >= 1  # the contour panel
-    contour_ax = next(ax for ax in fig.axes if ax.get_title() == "layer contours")
+    contour_ax = next(ax for ax in fig.axes if ax.get_title().startswith("layer contours"))
     legend = contour_ax.get_legend()
     assert legend is not None
     assert any("6 corners" in t.get_text() for t in legend.get_texts())
@@ -104,31 +105,31 @@ def test_box_union_grasp_is_drawn_on_the_layer_model(tmp_path: Path) -> None:
     assert plan.best is not None
     fig = plot_exploration(record, tmp_path / "l.png", mesh=mesh, grasp=plan, dpi=60)
     assert "on the layer contours" in fig.texts[0].get_text()
-    (ax3,) = [ax for ax in fig.axes if ax.name == "3d"]
-    legend3 = ax3.get_legend()
-    assert legend3 is not None
-    labels = [t.get_text() for t in legend3.get_texts()]
+    labels = _figure_legend(fig)
     assert "layer model" in labels
-    assert "grasp" in labels
-    contour_ax = next(ax for ax in fig.axes if ax.get_title() == "layer contours")
+    assert "grasp (jaws and their line)" in labels
+    contour_ax = next(ax for ax in fig.axes if ax.get_title().startswith("layer contours"))
     drawn = {line.get_label(): line for line in contour_ax.get_lines()}
     # the grasp seen from above joins the two grasp points
     xy = np.asarray(drawn["grasp"].get_xydata(), dtype=float)
     assert np.allclose(xy, np.asarray(plan.best.points)[:, :2])
     assert "centre of mass" in drawn
-    _drawn(tmp_path / "l.png", (384, 288))
+    _drawn(tmp_path / "l.png", (480, 360))
 
 
 def test_a_non_convex_polyhedron_is_drawn_as_the_convex_envelope() -> None:
     mesh = l_shape(0.12, 0.08, 0.04, 0.04)
     record = sample_record(mesh, builtin_finger("33"), quantise=False, noise=0.0)
     fig = plot_exploration(record, grasp=True)
-    (ax3,) = [ax for ax in fig.axes if ax.name == "3d"]
-    legend3 = ax3.get_legend()
-    assert legend3 is not None
-    labels = [t.get_text() for t in legend3.get_texts()]
-    assert "convex envelope" in labels
-    assert "polyhedron" not in labels
+    labels = _figure_legend(fig)
+    assert any(label.startswith("envelope of the touched planes\n(concave") for label in labels)
+    assert not any(label.startswith("polyhedron") for label in labels)
+
+
+def _figure_legend(fig: Figure) -> list[str]:
+    """The labels of the figure's legend (beside or below the 3-D view)."""
+    (legend,) = fig.legends
+    return [t.get_text() for t in legend.get_texts()]
 
 
 class _Result:
@@ -141,7 +142,7 @@ def test_plot_classification(tmp_path: Path, box_record: ExplorationRecord) -> N
     result = _Result(build_model(box_record), kb.classify("101101011"))
     fig = plot_classification(result, tmp_path / "c.png", dpi=50)
     assert "RECTANGULAR PARALLELEPIPED" in fig.texts[0].get_text()
-    _drawn(tmp_path / "c.png", (320, 240))
+    _drawn(tmp_path / "c.png", (400, 300))  # the default 8 × 6 inches at 50 dpi
     with pytest.raises(UsageError):
         plot_classification(object())
 
@@ -210,3 +211,39 @@ def test_module_examples() -> None:
     result = doctest.testmod(tactile_kb.plot, optionflags=doctest.ELLIPSIS)
     assert result.attempted > 0
     assert result.failed == 0
+
+
+def test_a_large_tree_is_folded_off_the_path_and_the_answer_highlighted() -> None:
+    kb = compile_rules("polyhedra")
+    full = choice_tree(kb)
+    assert full is not None
+    assert full.leaves > 48
+    decision = kb.classify("101101111000000")
+    fig = plot_tree(kb, decision=decision)
+    (ax,) = fig.axes
+    boxes = [t for t in ax.texts if t.get_bbox_patch() is not None]
+    assert 4 <= len(boxes) <= 20  # legible: folded to what fits
+    hot = [t for t in boxes if to_hex(t.get_bbox_patch().get_edgecolor()) == "#e66100"]
+    assert [t.get_text().replace("\n", " ") for t in hot] == [decision.answer]
+    assert all(t.get_fontsize() >= 6 for t in ax.texts)
+    assert "folded" in fig.texts[0].get_text()
+
+
+def test_classify_plot_draws_the_true_mesh(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    import tactile_kb.plot
+    from tactile_kb.cli import main
+
+    seen: list[object] = []
+    real = tactile_kb.plot.plot_classification
+
+    def spy(result: object, path: object = None, **kw: object) -> object:
+        seen.append(kw.get("mesh"))
+        return real(result, path, **kw)  # type: ignore[arg-type]
+
+    monkeypatch.setattr(tactile_kb.plot, "plot_classification", spy)
+    stl = tmp_path / "cube.stl"
+    box(0.08, 0.08, 0.08).export(stl)
+    assert main(["classify", str(stl), "--plot", str(tmp_path / "c.png")]) == 0
+    (mesh,) = seen
+    assert mesh is not None
+    assert len(mesh.faces) == 12  # type: ignore[attr-defined]

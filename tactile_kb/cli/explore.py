@@ -4,19 +4,24 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
 import sys
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from tactile_kb.cli.options import (
+    EXIT_OK,
     add_exploration_options,
     add_object_inputs,
+    check_noise,
     check_picture,
-    error_line,
+    notices,
+    object_failed,
     object_inputs,
     picture_paths,
+    progress,
 )
-from tactile_kb.errors import TactileKBError, UsageError
+from tactile_kb.errors import UsageError
 
 if TYPE_CHECKING:
     from tactile_kb.pipeline import Classification
@@ -41,9 +46,14 @@ def register(sub: argparse._SubParsersAction[Any]) -> None:
     p.add_argument("--plot", metavar="FILE", help="draw what the finger found (.png, .svg or .pdf)")
     p.set_defaults(func=_classify)
 
-    p = sub.add_parser("explore", help="explore one object and save the record")
-    p.add_argument("path", metavar="PATH")
-    p.add_argument("--out", required=True, metavar="RECORD.json")
+    p = sub.add_parser("explore", help="explore objects and save their records")
+    p.add_argument("paths", nargs="+", metavar="PATH", help="mesh files (STL, OBJ, PLY), metres")
+    p.add_argument(
+        "--out",
+        required=True,
+        metavar="RECORD.json",
+        help="the record; with several objects RECORD-<object>.json each",
+    )
     add_exploration_options(p)
     p.set_defaults(func=_explore)
 
@@ -60,14 +70,14 @@ def register(sub: argparse._SubParsersAction[Any]) -> None:
 
 def _emit(result: Classification, as_json: bool) -> None:
     if as_json:
-        print(json.dumps(result.summary()), flush=True)
+        print(json.dumps(result.summary(), ensure_ascii=False), flush=True)
     else:
         print(f"{result.object}- {result.answer}", flush=True)
 
 
 def _classify(args: argparse.Namespace) -> int:
     items = object_inputs(args)
-    if args.plot:
+    if args.plot is not None:
         check_picture(args.plot, "--plot")
     from tactile_kb.pipeline import classify, classify_record, knowledge_base
     from tactile_kb.record import ExplorationRecord
@@ -78,55 +88,79 @@ def _classify(args: argparse.Namespace) -> int:
     kb = knowledge_base(args.rules)
     explorer = get_explorer(args.explorer) if args.paths else None
     finger = load_finger(args.finger)
+    check_noise(args.noise, finger)
     pictures = picture_paths(args.plot, [item for item, _ in items]) if args.plot else []
-    failed = 0
+    code = EXIT_OK
     for index, (item, is_record) in enumerate(items):
-        try:
-            if is_record:
-                result = classify_record(ExplorationRecord.load(item), rules=kb)
-            else:
-                assert explorer is not None
-                result = classify(
-                    item,
-                    rules=kb,
-                    explorer=explorer,
-                    finger=finger,
-                    noise=args.noise,
-                    seed=args.seed,
-                )
-        except TactileKBError as exc:
-            failed += 1
-            print(error_line(item, exc), file=sys.stderr, flush=True)
+        try:  # any failure, even out of memory, is this object's alone
+            with progress(item):
+                if is_record:
+                    result = classify_record(ExplorationRecord.load(item), rules=kb)
+                else:
+                    assert explorer is not None
+                    result = classify(
+                        item,
+                        rules=kb,
+                        explorer=explorer,
+                        finger=finger,
+                        noise=args.noise,
+                        seed=args.seed,
+                    )
+        except Exception as exc:
+            code = max(code, object_failed(args.command, item, exc, args.json))
             continue
+        for note in notices(result.record):
+            print(f"tactile-kb classify: note: {item}: {note}", file=sys.stderr, flush=True)
         _emit(result, args.json)  # the answer is out before any picture is drawn
         if pictures:
+            from tactile_kb.objects import load_object
             from tactile_kb.plot import plot_classification
 
-            try:
-                plot_classification(result, pictures[index])
-            except TactileKBError as exc:
-                failed += 1
-                print(error_line(item, exc), file=sys.stderr, flush=True)
-    return 1 if failed else 0
+            try:  # with the true mesh, faint, when the object was a mesh file
+                mesh = None if is_record else load_object(item)
+                plot_classification(result, pictures[index], mesh=mesh)
+            except Exception as exc:
+                code = max(code, object_failed(args.command, item, exc, False))
+    return code
 
 
 def _explore(args: argparse.Namespace) -> int:
     out = Path(args.out)
-    if not out.parent.exists():
+    if not args.out or not out.name:
+        raise UsageError(f"--out {args.out!r}: give a file name for the record")
+    if not out.parent.is_dir():
         raise UsageError(f"--out {args.out}: directory {str(out.parent)!r} does not exist")
+    if not os.access(out.parent, os.W_OK):
+        raise UsageError(f"--out {args.out}: directory {str(out.parent)!r} is not writable")
     from tactile_kb.touch.explorers import get_explorer
     from tactile_kb.touch.finger import load_finger
 
     explorer = get_explorer(args.explorer)
-    record = explorer.explore(
-        args.path, finger=load_finger(args.finger), seed=args.seed, noise=args.noise
-    )
-    record.save(out)
-    print(
-        f"{args.path}: {record.touches} touches, {len(record.contacts)} contacts, "
-        f"path {record.path_length:.3f} m → {out}"
-    )
-    return 0
+    finger = load_finger(args.finger)
+    check_noise(args.noise, finger)
+    outs = record_paths(args.out, args.paths)
+    code = EXIT_OK
+    for path, target in zip(args.paths, outs, strict=True):
+        try:
+            with progress(path):
+                record = explorer.explore(path, finger=finger, seed=args.seed, noise=args.noise)
+            record.save(target)
+        except Exception as exc:
+            code = max(code, object_failed(args.command, path, exc, False))
+            continue
+        for note in notices(record):
+            print(f"tactile-kb explore: note: {path}: {note}", file=sys.stderr, flush=True)
+        print(
+            f"{path}: {record.touches} touches, {len(record.contacts)} contacts, "
+            f"path {record.path_length:.3f} m → {target}",
+            flush=True,
+        )
+    return code
+
+
+def record_paths(base: str, items: list[str]) -> list[Path]:
+    """One record path per object: ``base`` for one, else ``base-<stem>`` (see picture_paths)."""
+    return picture_paths(base, items)
 
 
 def _demo(args: argparse.Namespace) -> int:
@@ -136,19 +170,19 @@ def _demo(args: argparse.Namespace) -> int:
 
     kb = knowledge_base("parallelepipeds")
     explorer = get_explorer(args.explorer)
-    failed = 0
+    code = EXIT_OK
     for name, mesh, _expected in fig5_objects():
         try:
-            result = classify(mesh, rules=kb, explorer=explorer, finger="33", seed=0)
-        except TactileKBError as exc:
-            failed += 1
-            print(error_line(name, exc), file=sys.stderr, flush=True)
+            with progress(name):
+                result = classify(mesh, rules=kb, explorer=explorer, finger="33", seed=0)
+        except Exception as exc:
+            code = max(code, object_failed(args.command, name, exc, args.json))
             continue
         if args.json:
-            print(json.dumps({**result.summary(), "object": name}), flush=True)
+            print(json.dumps({**result.summary(), "object": name}, ensure_ascii=False), flush=True)
         else:
             print(f"{name}- {result.answer}", flush=True)
-    return 1 if failed else 0
+    return code
 
 
 def _plugins(args: argparse.Namespace) -> int:

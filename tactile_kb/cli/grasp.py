@@ -17,16 +17,20 @@ import sys
 from typing import Any
 
 from tactile_kb.cli.options import (
+    EXIT_FAILED,
+    EXIT_OK,
     add_exploration_options,
     add_object_inputs,
+    check_noise,
     check_picture,
-    error_line,
     nonnegative,
+    object_failed,
     object_inputs,
     picture_paths,
     positive,
+    progress,
 )
-from tactile_kb.errors import TactileKBError, UsageError
+from tactile_kb.errors import UsageError
 
 __all__ = ["register"]
 
@@ -129,37 +133,42 @@ def _grasp(args: argparse.Namespace) -> int:
     from tactile_kb.touch.finger import load_finger
 
     items = object_inputs(args)
-    if args.plot:
+    if args.plot is not None:
         check_picture(args.plot, "--plot", args.size, args.dpi)
     explorer = get_explorer(args.explorer) if args.paths else None
     finger = load_finger(args.finger)
+    check_noise(args.noise, finger)
     pictures = picture_paths(args.plot, [item for item, _ in items]) if args.plot else []
-    failed = 0
+    code = EXIT_OK
     for index, (item, is_record) in enumerate(items):
-        try:
-            if is_record:
-                record = ExplorationRecord.load(item)
-            else:
-                assert explorer is not None
-                record = explorer.explore(item, finger=finger, seed=args.seed, noise=args.noise)
-            model = build_model(record)
-            plan = plan_grasp(
-                model,
-                mu=args.mu,
-                max_opening=args.max_opening,
-                margin=args.margin,
-                mass=args.mass,
-            )
-        except TactileKBError as exc:
-            failed += 1
-            print(error_line(item, exc), file=sys.stderr, flush=True)
+        try:  # any failure, even out of memory, is this object's alone
+            with progress(item):
+                if is_record:
+                    record = ExplorationRecord.load(item)
+                else:
+                    assert explorer is not None
+                    record = explorer.explore(item, finger=finger, seed=args.seed, noise=args.noise)
+                model = build_model(record)
+                plan = plan_grasp(
+                    model,
+                    mu=args.mu,
+                    max_opening=args.max_opening,
+                    margin=args.margin,
+                    mass=args.mass,
+                )
+        except Exception as exc:
+            code = max(code, object_failed(args.command, item, exc, args.json))
             continue
+        for note in record.notes:
+            print(f"tactile-kb grasp: note: {item}: {note}", file=sys.stderr, flush=True)
         if not plan.ok:
-            failed += 1
+            code = max(code, EXIT_FAILED)
         if args.json:
             out = plan.to_dict()
             out["object"] = plan.object or item
-            print(json.dumps(out), flush=True)
+            out["touches"] = record.touches
+            out["contacts"] = len(record.contacts)
+            print(json.dumps(out, ensure_ascii=False), flush=True)
         else:
             print(_line(plan), flush=True)
         if pictures:  # the plan is out before any picture is drawn
@@ -167,10 +176,9 @@ def _grasp(args: argparse.Namespace) -> int:
 
             try:
                 plot_exploration(model, pictures[index], grasp=plan, size=args.size, dpi=args.dpi)
-            except TactileKBError as exc:
-                failed += 1
-                print(error_line(item, exc), file=sys.stderr, flush=True)
-    return 1 if failed else 0
+            except Exception as exc:
+                code = max(code, object_failed(args.command, item, exc, False))
+    return code
 
 
 def _plot(args: argparse.Namespace) -> int:
@@ -192,11 +200,12 @@ def _plot(args: argparse.Namespace) -> int:
 
 
 def _tree(args: argparse.Namespace) -> int:
+    from tactile_kb.cli.kb import _load
     from tactile_kb.kb.compiler import compile_rules
     from tactile_kb.plot import plot_tree
 
     check_picture(args.out, "--out", args.size, args.dpi)
-    kb = compile_rules(args.rules)
+    kb = compile_rules(_load(args.rules))
     decision = None
     if args.bits is not None:
         bits = args.bits.strip()

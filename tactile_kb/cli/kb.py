@@ -15,13 +15,15 @@ import json
 import re
 import sys
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
+from tactile_kb.cli.options import EXIT_FAILED, EXIT_OK, EXIT_USAGE, object_failed
 from tactile_kb.errors import Problem, RuleFileError, UsageError
-from tactile_kb.kb.base import KnowledgeBase
-from tactile_kb.kb.compiler import compile_rules
-from tactile_kb.kb.engine import Decision
-from tactile_kb.kb.rules import RuleSet, load_rules
+
+if TYPE_CHECKING:  # the compiler (dd, networkx) is imported by the commands that use it
+    from tactile_kb.kb.base import KnowledgeBase
+    from tactile_kb.kb.engine import Decision
+    from tactile_kb.kb.rules import RuleSet
 
 __all__ = ["register"]
 
@@ -38,6 +40,7 @@ def register(sub: argparse._SubParsersAction[Any]) -> None:
     p = sub.add_parser("compile", help="compile a rule file and print its r(L) models")
     p.add_argument("rules", metavar="FILE_OR_NAME", help="a rule file or a packaged name")
     p.add_argument("--format", choices=("text", "json"), default="text")
+    p.add_argument("--json", action="store_true", help="print JSON (the same as --format json)")
     p.set_defaults(func=run_compile)
 
     p = sub.add_parser("query", help="classify an assignment of the propositions")
@@ -49,50 +52,67 @@ def register(sub: argparse._SubParsersAction[Any]) -> None:
 
 
 def _load(arg: str) -> RuleSet:
+    """The rule file or packaged rule set ``arg`` names (a name that names nothing is a
+    usage error, exit 2)."""
+    from tactile_kb.kb.rules import load_rules
+
+    if not arg:
+        raise UsageError("no rule file given ('')")
     path = Path(arg)
     if path.exists() or arg.endswith((".yaml", ".yml")) or "/" in arg:
+        if not path.exists():
+            return load_rules(arg)  # the UsageError naming the packaged rule sets
         return load_rules(path)
     return load_rules(arg)
 
 
 def run_validate(args: argparse.Namespace) -> int:
-    failed = False
+    code = EXIT_OK
     for arg in args.files:
-        problems: list[Problem]
-        try:
-            rules = _load(arg)
-        except RuleFileError as exc:
-            problems = list(exc.problems)
-            summary = ""
-        except UsageError as exc:
-            print(f"tactile-kb: error: {exc}", file=sys.stderr)
-            failed = True
-            continue
-        else:
-            # Feature bindings (against the registry, plugins included) and the logic are
-            # checked together, so that every problem is listed at once.
-            from tactile_kb.pipeline import binding_problems
+        try:  # any failure, even out of memory, is this file's alone
+            code = max(code, _validate_one(arg))
+        except Exception as exc:
+            code = max(code, object_failed("validate", arg, exc, False))
+    return code
 
-            problems = binding_problems(rules, missing="warning")
-            try:
-                kb = compile_rules(rules)
-                problems += list(kb.problems)
-                summary = (
-                    f"{kb.rules.file}: ok: {kb.n} propositions, {len(kb.classes)} classes, "
-                    f"|r(L)| = {kb.r_count}"
-                )
-            except RuleFileError as exc:
-                problems += list(exc.problems)
-                summary = ""
-        problems.sort(key=lambda p: (p.file, p.line, p.column))
-        for problem in problems:
-            print(problem, file=sys.stderr)
-        if any(p.severity == "error" for p in problems):
-            failed = True
-        else:
-            warn = f", {len(problems)} warning{'s' * (len(problems) != 1)}" if problems else ""
-            print(summary + warn)
-    return 1 if failed else 0
+
+def _validate_one(arg: str) -> int:
+    """Print the problems of one rule file and its summary line; return its exit code (a
+    name that names nothing is a usage error, 2, as docs/cli.md says)."""
+    problems: list[Problem]
+    try:
+        rules = _load(arg)
+    except RuleFileError as exc:
+        problems = list(exc.problems)
+        summary = ""
+    except UsageError as exc:
+        print(f"tactile-kb validate: error: {exc}", file=sys.stderr)
+        return EXIT_USAGE
+    else:
+        # Feature bindings (against the registry, plugins included) and the logic are
+        # checked together, so that every problem is listed at once.
+        from tactile_kb.bindings import binding_problems
+        from tactile_kb.kb.compiler import compile_rules
+
+        problems = binding_problems(rules, missing="warning")
+        try:
+            kb = compile_rules(rules)
+            problems += list(kb.problems)
+            summary = (
+                f"{kb.rules.file}: ok: {kb.n} propositions, {len(kb.classes)} classes, "
+                f"|r(L)| = {kb.r_count}"
+            )
+        except RuleFileError as exc:
+            problems += list(exc.problems)
+            summary = ""
+    problems.sort(key=lambda p: (p.file, p.line, p.column))
+    for problem in problems:
+        print(problem, file=sys.stderr)
+    if any(p.severity == "error" for p in problems):
+        return EXIT_FAILED
+    warn = f", {len(problems)} warning{'s' * (len(problems) != 1)}" if problems else ""
+    print(summary + warn)
+    return EXIT_OK
 
 
 def _bits_line(bits: tuple[str, ...]) -> str:
@@ -130,8 +150,16 @@ def compile_text(kb: KnowledgeBase) -> str:
 
 
 def run_compile(args: argparse.Namespace) -> int:
-    kb = compile_rules(_load(args.rules))
-    if args.format == "json":
+    rules = _load(args.rules)
+    # compile refuses what validate refuses: bad feature bindings and report measures too
+    from tactile_kb.bindings import binding_problems
+    from tactile_kb.kb.compiler import compile_rules
+
+    bad = [p for p in binding_problems(rules, missing="warning") if p.severity == "error"]
+    if bad:
+        raise RuleFileError(bad, rules.source.excerpt(bad[0].line, bad[0].column))
+    kb = compile_rules(rules)
+    if args.json or args.format == "json":
         data = kb.to_dict()
         data["economy"] = kb.economy().to_dict()
         print(json.dumps(data, indent=2, ensure_ascii=False))
@@ -179,6 +207,9 @@ def run_query(args: argparse.Namespace) -> int:
         raise UsageError("give either ID=0|1 assignments or --bits, not both")
     if args.bits is None and not args.assignments:
         raise UsageError("give ID=0|1 assignments or --bits")
+    from tactile_kb.kb.compiler import compile_rules
+    from tactile_kb.kb.engine import INCONSISTENT
+
     assignment: Any = args.bits if args.bits is not None else parse_assignments(args.assignments)
     kb = compile_rules(_load(args.rules))
     decision = kb.classify(assignment)
@@ -186,4 +217,11 @@ def run_query(args: argparse.Namespace) -> int:
         print(json.dumps(decision.to_dict(), indent=2, ensure_ascii=False))
     else:
         print(decision_text(decision))
+    if decision.label == INCONSISTENT:
+        print(
+            "tactile-kb query: error: the values contradict the connections: "
+            + "; ".join(decision.violated),
+            file=sys.stderr,
+        )
+        return 1
     return 0

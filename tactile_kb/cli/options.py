@@ -3,23 +3,96 @@
 from __future__ import annotations
 
 import argparse
+import contextlib
+import json
 import math
-from collections.abc import Sequence
+import os
+import sys
+import threading
+from collections.abc import Iterator, Sequence
 from pathlib import Path
+from typing import Any, TextIO
 
-from tactile_kb.errors import UsageError
+from tactile_kb.errors import PluginError, PluginUnavailableError, TactileKBError, UsageError
 
 __all__ = [
+    "BUG_HINT",
+    "EXIT_FAILED",
+    "EXIT_INTERNAL",
+    "EXIT_OK",
+    "EXIT_USAGE",
     "add_exploration_options",
     "add_object_inputs",
+    "check_noise",
     "check_picture",
-    "error_line",
+    "exit_code_of",
     "nonnegative",
+    "notices",
+    "object_failed",
     "object_inputs",
     "picture_paths",
     "positive",
+    "progress",
     "seed",
 ]
+
+
+EXIT_OK, EXIT_FAILED, EXIT_USAGE, EXIT_INTERNAL = 0, 1, 2, 3
+"""The exit codes: 0 success; 1 an input was read and failed (an invalid file, an object that
+could not be classified, an output that could not be written); 2 the command line is wrong (an
+unknown option, a bad value, a name or path that does not exist); 3 a bug in tactile_kb."""
+
+BUG_HINT = (
+    "this is a bug in tactile-kb; please report it with the command and its input files "
+    "(TACTILE_KB_TRACEBACK=1 shows the traceback)"
+)
+
+
+def exit_code_of(error: BaseException) -> int:
+    """The exit code an error gives (see :data:`EXIT_OK`)."""
+    if isinstance(error, UsageError) or (
+        isinstance(error, PluginError) and not isinstance(error, PluginUnavailableError)
+    ):
+        return EXIT_USAGE
+    if isinstance(error, TactileKBError | MemoryError | RecursionError):
+        return EXIT_FAILED
+    return EXIT_INTERNAL
+
+
+def error_kind(error: BaseException) -> str:
+    """The ``kind`` of a JSON error object: the exception's class name, ``InternalError`` for
+    an error that is a bug."""
+    if exit_code_of(error) == EXIT_INTERNAL:
+        return "InternalError"
+    return type(error).__name__
+
+
+def error_message(error: BaseException) -> str:
+    """A one-line message for ``error``, whatever it is."""
+    if isinstance(error, MemoryError):
+        return "out of memory: the input is too large to process on this machine"
+    if isinstance(error, RecursionError):
+        return "the input is nested too deeply to process"
+    text = " ".join(str(error).split()) or type(error).__name__
+    if exit_code_of(error) == EXIT_INTERNAL:
+        return f"internal error: {type(error).__name__}: {text} ({BUG_HINT})"
+    return text
+
+
+def object_failed(command: str, item: str, error: BaseException, as_json: bool) -> int:
+    """Report that ``item`` failed in ``command`` (one line on stderr; a JSON error object on
+    stdout with ``as_json``) and return the exit code this failure gives."""
+    message = error_message(error)
+    named = message if message.startswith(item) else f"{item}: {message}"  # named once
+    print(
+        f"tactile-kb {command}: error: {named}",
+        file=sys.stderr,
+        flush=True,
+    )
+    if as_json:
+        obj = {"object": item, "error": {"kind": error_kind(error), "message": message}}
+        print(json.dumps(obj, ensure_ascii=False), flush=True)
+    return exit_code_of(error)
 
 
 def nonnegative(text: str) -> float:
@@ -101,12 +174,18 @@ def check_picture(
 ) -> None:
     """Refuse, before any work is done, a picture path or size that cannot be written."""
     p = Path(path)
+    if not path:
+        raise UsageError(f"{flag} '': give a picture file name ending in .png, .svg or .pdf")
     if p.suffix.lower() not in PICTURE_SUFFIXES:
         raise UsageError(f"{flag} {path}: the file must end in {', '.join(PICTURE_SUFFIXES)}")
     if not p.parent.is_dir():
         raise UsageError(f"{flag} {path}: directory {str(p.parent)!r} does not exist")
     if p.is_dir():
         raise UsageError(f"{flag} {path}: is a directory")
+    if p.exists() and not p.is_file():
+        raise UsageError(f"{flag} {path}: exists and is not a regular file")
+    if not os.access(p.parent, os.W_OK):
+        raise UsageError(f"{flag} {path}: directory {str(p.parent)!r} is not writable")
     if size is not None and max(size) * dpi > MAX_PIXELS:
         raise UsageError(
             f"--size {size[0]:g}x{size[1]:g} at --dpi {dpi:g} is over {MAX_PIXELS} pixels a side"
@@ -131,7 +210,53 @@ def picture_paths(base: str, items: Sequence[str]) -> list[Path]:
     return out
 
 
-def error_line(item: str, error: Exception) -> str:
-    """The one line for an object that failed, naming it once."""
-    message = str(error)
-    return f"tactile-kb: error: {message if message.startswith(item) else f'{item}: {message}'}"
+def check_noise(noise: float, finger: Any) -> None:
+    """Refuse, before any work, a σ no contact sensor could have (≥ the tip radius). A σ large
+    enough to change answers is allowed; each exploration says so in its notes."""
+    from tactile_kb.touch.explorers import noise_problem
+
+    refused, _warning = noise_problem(noise, finger.radius)
+    if refused:
+        raise UsageError(f"--noise {noise:g}: {refused}")
+
+
+def notices(record: Any) -> list[str]:
+    """What a person should be told about an exploration: its notes."""
+    return list(record.notes)
+
+
+@contextlib.contextmanager
+def progress(item: str, *, stream: TextIO | None = None) -> Iterator[None]:
+    """Show ``item`` and the time spent on it on a terminal while the block runs.
+
+    Nothing is shown when ``stream`` (default stderr) is not a terminal, nor for work that
+    ends within half a second; the line is erased when the work ends.
+    """
+    out = sys.stderr if stream is None else stream
+    if not (hasattr(out, "isatty") and out.isatty()):
+        yield
+        return
+    from tqdm import tqdm
+
+    done = threading.Event()
+
+    def show() -> None:
+        if done.wait(0.5):
+            return
+        with tqdm(
+            total=None,
+            desc=f"working on {item}",
+            bar_format="{desc} … {elapsed}",
+            file=out,
+            leave=False,
+        ) as bar:
+            while not done.wait(0.25):
+                bar.refresh()
+
+    thread = threading.Thread(target=show, daemon=True)
+    thread.start()
+    try:
+        yield
+    finally:
+        done.set()
+        thread.join()

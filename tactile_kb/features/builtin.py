@@ -67,17 +67,19 @@ import math
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from importlib.metadata import entry_points
-from typing import Any, Literal
+from typing import TYPE_CHECKING, Any, Literal
 
 import numpy as np
 from numpy.typing import NDArray
 
 from tactile_kb.errors import GeometryError, PluginError, UsageError
-from tactile_kb.geometry.model import ObjectModel
-from tactile_kb.geometry.polyhedron import Polyhedron
-from tactile_kb.geometry.sections import cross_section
 from tactile_kb.plugins import Registry
-from tactile_kb.types import FloatArray
+
+if TYPE_CHECKING:  # the geometry (scipy) is imported when a feature is evaluated, so that
+    # checking a rule file's bindings stays light
+    from tactile_kb.geometry.model import ObjectModel
+    from tactile_kb.geometry.polyhedron import Polyhedron
+    from tactile_kb.types import FloatArray
 
 __all__ = [
     "BUILTIN_FEATURES",
@@ -364,6 +366,8 @@ def _diameter(model: ObjectModel, name: str) -> float:
 
 def section_at(model: ObjectModel, z: float) -> FloatArray:
     """The cross-section polygon (k, 2) of the polyhedron at height ``z`` (counter-clockwise)."""
+    from tactile_kb.geometry.sections import cross_section
+
     return cross_section(_poly(model, "section_at"), z)
 
 
@@ -775,7 +779,7 @@ BUILTIN_FEATURES: Mapping[str, Feature] = {
         _feature(orthogonal_faces),
     )
 }
-"""The built-in features by name; the entry point ``builtin`` of ``tactile_kb.features``."""
+"""The built-in features by name; the entry point ``builtin`` of ``tactile_kb.features.builtin``."""
 
 
 def _valid(obj: Any) -> bool:

@@ -50,7 +50,6 @@ from tactile_kb.kb.notation import (
     cube_ints,
     flat_cubes,
     paper,
-    to_sympy,
 )
 from tactile_kb.kb.rules import PAPER_EXAMPLE, RuleSet, load_rules, parse_rules
 
@@ -154,7 +153,7 @@ def _compile_class(kb: Knowledge, k: int) -> CompiledClass:
         factors=factors,
         paper=text_paper,
         ascii=ascii_text(factors, kb.ids),
-        expr=to_sympy(factors, kb.symbols),
+        ids=kb.ids,
         bits=bit_strings(factors, kb.n),
         ints=ints,
         proposition=f"L: object is {rc.name}",

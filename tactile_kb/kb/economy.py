@@ -45,6 +45,7 @@ import numpy as np
 
 from tactile_kb.kb.engine import ternary_closure
 from tactile_kb.kb.expr import evaluate_columns, names
+from tactile_kb.kb.expr import names as expr_names
 
 if TYPE_CHECKING:
     from tactile_kb.kb.bdd import Node
@@ -236,6 +237,12 @@ def optimal_ternary(kb: Knowledge) -> float:
     size = 1 << m
     ints = np.arange(size, dtype=np.int64)
     cols = {v: ((ints >> (m - 1 - i)) & 1).astype(bool) for i, v in enumerate(names)}
+    # A class may mention a proposition outside the support of its function (``B & (A | ~A)``
+    # depends on B only): its value there changes nothing, so any constant column will do.
+    absent = np.zeros(size, dtype=bool)
+    for cls in kb.rules.classes:
+        for v in expr_names(cls.expr):
+            cols.setdefault(v, absent)
 
     def evaluate(expr: Any) -> np.ndarray[Any, Any]:
         return evaluate_columns(expr, cols, size)

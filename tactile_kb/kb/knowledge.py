@@ -9,16 +9,17 @@ from __future__ import annotations
 
 import math
 from collections.abc import Iterator
-from dataclasses import dataclass
-from typing import Any
-
-import sympy
-from sympy.logic import SOPform
+from dataclasses import dataclass, field
+from functools import cached_property
+from typing import TYPE_CHECKING, Any
 
 from tactile_kb.errors import Problem, UsageError
 from tactile_kb.kb.bdd import Node, exact_count, isop, iter_minterms
-from tactile_kb.kb.notation import Factored, Sop, sop_from_sympy
+from tactile_kb.kb.notation import Factored, Sop, sop_from_sympy, to_sympy
 from tactile_kb.kb.rules import RuleSet
+
+if TYPE_CHECKING:
+    import sympy
 
 __all__ = ["EXACT_LIMIT", "EXACT_MAX_MINTERMS", "CompiledClass", "Group", "Knowledge"]
 
@@ -60,11 +61,19 @@ class CompiledClass:
     factors: Factored
     paper: str
     ascii: str
-    expr: Any
+    ids: tuple[str, ...] = field(repr=False)
+    """The propositions in declared order (the indices of :attr:`factors`)."""
     bits: tuple[str, ...]
     ints: tuple[int, ...]
     proposition: str
     equation: str
+
+    @cached_property
+    def expr(self) -> Any:
+        """The reduced disjunction as a sympy Boolean (sympy is imported on first use)."""
+        import sympy
+
+        return to_sympy(self.factors, tuple(sympy.Symbol(name) for name in self.ids))
 
     def to_dict(self) -> dict[str, Any]:
         """A JSON-ready summary."""
@@ -128,7 +137,6 @@ class Knowledge:
         self.gap_bdd: Node = self.r & ~taken
         self.classes: tuple[CompiledClass, ...] = ()
         self.problems: tuple[Problem, ...] = ()
-        self.symbols: tuple[sympy.Symbol, ...] = tuple(sympy.Symbol(name) for name in self.ids)
         self._sop_cache: dict[Node, Sop] = {}
 
     def __repr__(self) -> str:
@@ -136,6 +144,13 @@ class Knowledge:
             f"<{type(self).__name__} {self.rules.name!r}: n={self.n}, |r(L)|={self.r_count}, "
             f"{len(self.classes)} classes>"
         )
+
+    @cached_property
+    def symbols(self) -> tuple[sympy.Symbol, ...]:
+        """One sympy symbol per proposition, in declared order (sympy is imported here)."""
+        import sympy
+
+        return tuple(sympy.Symbol(name) for name in self.ids)
 
     # ----------------------------------------------------------------- models
 
@@ -171,6 +186,8 @@ class Knowledge:
             if small and exact_count(bdd, f, support) <= EXACT_MAX_MINTERMS:
                 syms = [self.symbols[self.index[v]] for v in support]
                 rows = [[int(m[v]) for v in support] for m in bdd.pick_iter(f, care_vars=support)]
+                from sympy.logic import SOPform  # exact minimisation of a small function
+
                 expr = SOPform(syms, rows)
                 sop = sop_from_sympy(expr, {s: self.index[s.name] for s in syms})
             else:

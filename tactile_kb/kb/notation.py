@@ -35,9 +35,10 @@ from __future__ import annotations
 
 import itertools
 from collections.abc import Iterable, Iterator, Mapping, Sequence
-from typing import Any, Literal
+from typing import TYPE_CHECKING, Any, Literal
 
-import sympy
+if TYPE_CHECKING:  # sympy is imported where it is used: printing needs none of it
+    import sympy
 
 __all__ = [
     "MACRON",
@@ -203,6 +204,8 @@ def cube_ints(cube: Cube, n: int) -> tuple[int, ...]:
 
 def sop_from_sympy(expr: Any, index: Mapping[sympy.Symbol, int]) -> Sop:
     """A sympy sum of products (``Or`` of ``And`` of literals, or a constant) as a :data:`Sop`."""
+    import sympy
+
     if expr is sympy.true:
         return ((),)
     if expr is sympy.false:
@@ -230,6 +233,7 @@ def _cube_order(cube: Cube) -> tuple[tuple[int, int], ...]:
 
 def to_sympy(factors: Factored, symbols: Sequence[sympy.Symbol]) -> Any:
     """The product of sums of products as a sympy Boolean (``symbols`` in declared order)."""
+    import sympy
 
     def cube(c: Cube) -> Any:
         return sympy.And(*[symbols[i] if v else sympy.Not(symbols[i]) for i, v in c])

@@ -379,7 +379,7 @@ def load_rules(name_or_path: str | Path) -> RuleSet:
         if packaged is not None and (not _suffix(text) or not Path(text).is_file()):
             return _load_traversable(packaged)
     path = Path(text)
-    if path.is_file():
+    if text and path.exists():  # a directory or device is refused by load_yaml, located
         return _build(load_yaml(path, error_cls=RuleFileError, keep_going=True))
     known = ", ".join(available_rule_sets()) or "(none found)"
     raise UsageError(
@@ -388,7 +388,7 @@ def load_rules(name_or_path: str | Path) -> RuleSet:
 
 
 def rules_directories() -> list[Traversable]:
-    """Where packaged rule sets are looked for: the installed ``tactile_kb/rules`` first,
+    """Where packaged rule sets are looked for: the installed ``tactile_kb/kb/rules`` first,
     then the source checkout's top-level ``rules/``."""
     dirs: list[Traversable] = []
     try:

@@ -36,13 +36,14 @@ tactile_kb.errors.PluginError: unknown explorer 'mujoco-nope' (known: ...)
 from __future__ import annotations
 
 import abc
+import math
 from typing import TYPE_CHECKING, Any, Literal, Protocol, runtime_checkable
 
 from tactile_kb.errors import PluginError, UsageError
 from tactile_kb.objects import ObjectLike, check_thickness, load_object, object_name
 from tactile_kb.plugins import Registry
 from tactile_kb.record import ExplorationRecord
-from tactile_kb.touch.finger import Finger, load_finger
+from tactile_kb.touch.finger import Finger, layout_warnings, load_finger
 from tactile_kb.touch.sensors import FaultySensors, check_fault_rates
 
 if TYPE_CHECKING:
@@ -54,6 +55,8 @@ if TYPE_CHECKING:
 __all__ = [
     "GOALS",
     "MUJOCO_HINT",
+    "NOISE_OBJECT_FRACTION",
+    "NOISE_WARN_FRACTION",
     "ExplorationSession",
     "Explorer",
     "Goal",
@@ -62,6 +65,7 @@ __all__ = [
     "available_explorers",
     "explorer_registry",
     "get_explorer",
+    "noise_problem",
 ]
 
 Goal = Literal["contact", "layer", "complete"]
@@ -87,6 +91,45 @@ class ExplorationSession(Protocol):
     def advance(self, goal: Goal = "complete") -> ExplorationRecord:
         """Explore until ``goal`` is reached (or the end); return the record so far."""
         ...
+
+
+NOISE_WARN_FRACTION = 0.2
+"""σ of the contact-position noise above this fraction of the tip radius is warned about: on
+the 5 mm tip, σ ≥ 1.5 mm makes flat faces read as curved."""
+
+NOISE_OBJECT_FRACTION = 0.03
+"""σ above this fraction of the object's thinnest extent is noted in the record."""
+
+
+def noise_problem(noise: float, tip_radius: float) -> tuple[str, str]:
+    """``(refusal, warning)`` for a contact-position noise σ (metres) on a tip of ``tip_radius``.
+
+    A σ that is negative, not finite, or at least the tip radius is refused: a sensor on the
+    tip cannot misplace a contact by more than the tip's own size. A σ above
+    :data:`NOISE_WARN_FRACTION` of the radius is allowed with a warning.
+
+    Examples
+    --------
+    >>> noise_problem(0.5, 0.005)[0]
+    'σ must be less than the tip radius (5 mm); the value is in metres, e.g. 0.0005 for 0.5 mm'
+    >>> noise_problem(0.0015, 0.005)[1]
+    'large against the 5 mm tip: flat faces may read as curved and faces may be lost'
+    """
+    r = f"{tip_radius * 1000:.3g} mm"
+    if not math.isfinite(noise) or noise < 0:
+        return (f"σ must be a finite number ≥ 0 metres, got {noise!r}", "")
+    if noise >= tip_radius:
+        return (
+            f"σ must be less than the tip radius ({r}); the value is in metres, "
+            "e.g. 0.0005 for 0.5 mm",
+            "",
+        )
+    if noise > NOISE_WARN_FRACTION * tip_radius:
+        return (
+            "",
+            f"large against the {r} tip: flat faces may read as curved and faces may be lost",
+        )
+    return ("", "")
 
 
 @runtime_checkable
@@ -194,12 +237,31 @@ class WorldExplorer(abc.ABC):
         """Start a lazy exploration of ``obj`` (nothing is explored before :meth:`ServoSession.advance`)."""
         from tactile_kb.touch.servo import Controller, ServoParams
 
+        f = load_finger(finger)
+        refused, warning = noise_problem(noise, f.radius)
+        if refused:
+            raise UsageError(f"noise σ = {noise:g} m: {refused}")
         check_fault_rates(noise=noise, dropout=self.dropout, false_fire=self.false_fire)
         if seed is not None and (not isinstance(seed, int) or seed < 0):
             raise UsageError(f"seed must be a whole number ≥ 0 or None, got {seed!r}")
         mesh = load_object(obj)
-        f = load_finger(finger)
         check_thickness(mesh, f.radius, name=object_name(obj))
+        notes = []
+        moved = float(mesh.metadata.get("moved_z", 0.0))
+        if abs(moved) > 1e-6:
+            notes.append(
+                f"the mesh was moved {moved * 1000:+.3g} mm along z so that it rests on the "
+                "table (z = 0)"
+            )
+        notes += layout_warnings(f)
+        if warning:
+            notes.append(f"noise σ = {noise * 1000:.3g} mm: {warning}")
+        smallest = float(min(mesh.extents))
+        if noise > NOISE_OBJECT_FRACTION * smallest:
+            notes.append(
+                f"noise σ = {noise * 1000:.3g} mm is large against the object "
+                f"({smallest * 1000:.3g} mm at its thinnest): faces and edges may be misread"
+            )
         world = FaultySensors(
             self.make_world(mesh, f, seed=seed),
             noise=noise,
@@ -215,6 +277,7 @@ class WorldExplorer(abc.ABC):
             seed=seed,
             noise=float(noise),
         )
+        controller.notes.extend(notes)
         return ServoSession(controller)
 
     def explore(

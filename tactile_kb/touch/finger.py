@@ -52,10 +52,12 @@ __all__ = [
     "ALIGN_4_DEG",
     "BUILTIN_LAYOUTS",
     "DEFAULT_TIP_RADIUS",
+    "MAX_USABLE_ERROR_DEG",
     "Coverage",
     "Finger",
     "builtin_finger",
     "coverage",
+    "layout_warnings",
     "load_finger",
     "load_layout",
 ]
@@ -330,6 +332,8 @@ def load_finger(finger: Finger | str | Path, *, radius: float | None = None) -> 
         out = builtin_finger(finger)
     else:
         path = Path(finger)
+        if not str(finger):
+            raise UsageError("no finger given (--finger ''): give 4, 33 or a YAML layout file")
         if not path.exists():
             known = ", ".join(sorted(BUILTIN_LAYOUTS))
             raise UsageError(
@@ -384,8 +388,65 @@ class Coverage:
 
     @property
     def complete(self) -> bool:
-        """Whether every direction of the region fires at least one sensor."""
+        """Whether every direction of the region fires at least one sensor.
+
+        Complete is not enough: a direction is reported as the direction of the sensor that
+        fires, up to :attr:`max_error_deg` away. See :attr:`adequate`.
+        """
         return not self.gaps
+
+    @property
+    def adequate(self) -> bool:
+        """Complete, and no contact direction is more than :data:`MAX_USABLE_ERROR_DEG` from
+        the sensor that reports it: the planes found are then close enough to the faces for the
+        features (parallel faces, perpendicular faces, edges) to be decided."""
+        return self.complete and self.max_error_deg <= MAX_USABLE_ERROR_DEG
+
+    @property
+    def problems(self) -> tuple[str, ...]:
+        """What is wrong with the layout for exploring polyhedra, one sentence each."""
+        out = []
+        if self.gaps:
+            e, a, size = self.gaps[0]
+            out.append(
+                f"{self.uncovered_fraction:.0%} of the contact directions fire no sensor "
+                f"(the largest gap: {size:g}° around elevation {e:g}°, azimuth {a:g}°), so "
+                "faces there are never sensed"
+            )
+        if self.max_error_deg > MAX_USABLE_ERROR_DEG:
+            out.append(
+                f"a contact direction can be {self.max_error_deg:.0f}° from the sensor that "
+                f"reports it (at most {MAX_USABLE_ERROR_DEG:g}° keeps faces and edges right), "
+                "so the planes found are that far off"
+            )
+        return tuple(out)
+
+
+MAX_USABLE_ERROR_DEG = 25.0
+"""The largest quantisation of a contact direction a layout may have for the features to be
+decided reliably (the 33-sensor finger: 20.3°; the parallel and perpendicular tests allow 15–20°)."""
+
+
+def layout_warnings(finger: Finger) -> list[str]:
+    r"""Warnings about a layout that is not built in: its :attr:`Coverage.problems`.
+
+    The built-in layouts are known (the 4-sensor finger is meant for layer contours and is
+    documented as such), so they give none.
+
+    Examples
+    --------
+    >>> tripod = load_layout("name: tripod\ncone_deg: 70\nsensors:\n"
+    ...     "  - {elevation: -20, azimuth: 0}\n  - {elevation: -20, azimuth: 120}\n"
+    ...     "  - {elevation: -20, azimuth: 240}\n")
+    >>> print(layout_warnings(tripod)[0])  # doctest: +ELLIPSIS
+    finger 'tripod': a contact direction can be 69° from the sensor that reports it ...
+    """
+    if finger.name in BUILTIN_LAYOUTS:
+        builtin = builtin_finger(finger.name)
+        if np.allclose(builtin.matrix, finger.matrix) and builtin.cone_deg == finger.cone_deg:
+            return []
+    report = coverage(finger, samples=8000)
+    return [f"finger {finger.name!r}: {p}; answers may be wrong" for p in report.problems]
 
 
 def coverage(finger: Finger, *, max_elevation_deg: float = 0.0, samples: int = 40000) -> Coverage:
@@ -402,6 +463,8 @@ def coverage(finger: Finger, *, max_elevation_deg: float = 0.0, samples: int = 4
     >>> c4 = coverage(builtin_finger("4"))
     >>> c4.complete, c4.gaps[0][0] < -40
     (False, True)
+    >>> c.adequate, c4.adequate
+    (True, False)
     """
     pts = _sphere_points(samples)
     elev = np.degrees(np.arcsin(np.clip(pts[:, 2], -1.0, 1.0)))
