@@ -32,9 +32,7 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
-import numpy as np
-from scipy.sparse import coo_array
-from scipy.sparse.csgraph import connected_components
+import networkx as nx
 
 from tactile_kb.errors import Problem, RuleFileError
 from tactile_kb.kb.analysis import analyse, conflicts
@@ -60,24 +58,21 @@ MAX_INTS = 1 << 16
 
 
 def _groups(rules: RuleSet, bdd: Any, conns: Sequence[Node]) -> tuple[Group, ...]:
-    """Independent groups: connected components of the graph joining the ids a connection names."""
+    """Independent groups: connected components of the graph joining the ids a connection names
+    (networkx, which dd imports anyway; scipy stays out of the rule-file commands)."""
     ids = rules.ids
     index = {name: i for i, name in enumerate(ids)}
     members = [[index[v] for v in names(c.expr)] for c in rules.connections]
-    rows = [m[0] for m in members for _ in m[1:]]
-    cols = [j for m in members for j in m[1:]]
-    graph = coo_array((np.ones(len(rows)), (rows, cols)), shape=(len(ids), len(ids)))
-    _, label = connected_components(graph, directed=False)
+    graph = nx.Graph()
+    graph.add_nodes_from(range(len(ids)))
+    graph.add_edges_from((m[0], j) for m in members for j in m[1:])
     # number the components by their first proposition, in declared order
-    first: dict[int, int] = {}
-    for lab in label.tolist():
-        first.setdefault(lab, len(first))
-    positions_of: dict[int, list[int]] = {}
-    for i, lab in enumerate(label.tolist()):
-        positions_of.setdefault(first[lab], []).append(i)
+    components = sorted((sorted(c) for c in nx.connected_components(graph)), key=lambda c: c[0])
+    group_of = {i: g for g, positions in enumerate(components) for i in positions}
+    positions_of = dict(enumerate(components))
     conn_of: dict[int, list[int]] = {}
     for c, m in zip(rules.connections, members, strict=True):
-        conn_of.setdefault(first[int(label[m[0]])] if m else -1, []).append(c.index)
+        conn_of.setdefault(group_of[m[0]] if m else -1, []).append(c.index)
     groups: list[Group] = []
     for g, positions in sorted(positions_of.items()):
         u = bdd.true
