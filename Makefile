@@ -11,7 +11,7 @@ PLUGIN_STAMP := $(VENV)/.installed-mujoco
 $(STAMP): pyproject.toml
 	test -x $(BIN)/python || $(PYTHON) -m venv $(VENV)
 	$(BIN)/python -m pip install --quiet --upgrade pip
-	$(BIN)/python -m pip install --quiet -e ".[dev]"
+	$(BIN)/python -m pip install --quiet -e ".[dev,dask,parquet]"
 	touch $(STAMP)
 
 $(PLUGIN_STAMP): $(STAMP) explorers/mujoco/pyproject.toml
