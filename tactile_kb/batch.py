@@ -152,13 +152,16 @@ def _check_option(name: str, value: Any) -> Any:
     """A per-row option value, checked; raises ValueError with a short reason."""
     if name in ("rules", "explorer", "finger"):
         return str(value)
+    if name in ("noise", "timeout"):
+        try:
+            number = float(value)
+        except (TypeError, ValueError):
+            raise ValueError(f"not a number: {value!r}") from None
     if name == "noise":
-        number = float(value)
         if not (number >= 0 and number != float("inf")):
             raise ValueError(f"must be a finite number ≥ 0, got {value!r}")
         return number
     if name == "timeout":
-        number = float(value)
         if not (number > 0 and number != float("inf")):
             raise ValueError(f"must be a number > 0, got {value!r}")
         return number
@@ -201,7 +204,7 @@ def _read_manifest(path: Path) -> list[BatchItem]:
         raise SourceError([Problem(name, 0, 0, "", f"cannot read the manifest: {exc}")]) from None
     for line, row in rows:
         if isinstance(row, str):
-            problems.append(Problem(name, line, 0, "", row))
+            problems.append(Problem(name, line, 1, "", row))
             continue
         unknown = [k for k in row if k not in known]
         if unknown:
@@ -209,7 +212,7 @@ def _read_manifest(path: Path) -> list[BatchItem]:
                 Problem(
                     name,
                     line,
-                    0,
+                    1,
                     "",
                     f"unknown column {unknown[0]!r} (known: {', '.join(known)})",
                 )
@@ -217,7 +220,7 @@ def _read_manifest(path: Path) -> list[BatchItem]:
             continue
         target = row.get("path")
         if target is None or not str(target).strip():
-            problems.append(Problem(name, line, 0, "path", "no path given"))
+            problems.append(Problem(name, line, 1, "path", "no path given"))
             continue
         mesh = Path(str(target).strip())
         if not mesh.is_absolute():
@@ -230,7 +233,7 @@ def _read_manifest(path: Path) -> list[BatchItem]:
             try:
                 options[key] = _check_option(key, value)
             except (TypeError, ValueError) as exc:
-                problems.append(Problem(name, line, 0, key, str(exc)))
+                problems.append(Problem(name, line, 1, key, str(exc)))
                 continue
             if key in ("rules", "finger") and not Path(options[key]).is_absolute():
                 beside = path.parent / options[key]
@@ -561,12 +564,16 @@ def _local_results(tasks: Iterator[Task], workers: int, work: str) -> Iterator[R
                 if task is None:
                     exhausted = True
                     break
-                if idle:
-                    slot = idle.pop()
-                else:
+                slot = idle.pop() if idle else None
+                if slot is None:
                     slot = _Slot(ctx, work)
                     started += 1
-                slot.send(task)
+                try:
+                    slot.send(task)
+                except OSError:  # an idle worker was killed: a fresh one takes the task
+                    slot.stop(kill=True)
+                    slot = _Slot(ctx, work)
+                    slot.send(task)
                 busy.append(slot)
             if not busy:
                 return
@@ -1115,7 +1122,7 @@ class BatchSummary:
             )
         return out
 
-    def plot_confusion(self, path: str | Path) -> None:
+    def plot_confusion(self, path: str | Path | io.BytesIO) -> None:
         """Draw the confusion matrix (counts, each row shaded by its share) to a PNG or SVG."""
         import matplotlib
 
@@ -1128,11 +1135,13 @@ class BatchSummary:
             [[self.confusion.get((e, a), 0) for a in answered] for e in expected], dtype=float
         )
         share = counts / np.maximum(counts.sum(axis=1, keepdims=True), 1)
-        width = max(5.0, 1.0 + 0.9 * len(answered) + 0.09 * max(len(e) for e in expected))
-        height = max(3.5, 1.6 + 0.55 * len(expected))
+        width = max(6.0, 2.5 + 1.0 * len(answered) + 0.09 * max(len(e) for e in expected))
+        height = max(3.5, 1.8 + 0.6 * len(expected) + 0.07 * max(len(a) for a in answered))
         fig, ax = plt.subplots(figsize=(width, height), dpi=120)
         try:
-            ax.imshow(share, cmap="Blues", vmin=0, vmax=1, aspect="auto")
+            image = ax.imshow(share, cmap="Blues", vmin=0, vmax=1, aspect="auto")
+            bar = fig.colorbar(image, ax=ax, fraction=0.05, pad=0.03)
+            bar.set_label("share of the row", fontsize=10)
             for i in range(len(expected)):
                 for j in range(len(answered)):
                     n = int(counts[i, j])
@@ -1157,7 +1166,7 @@ class BatchSummary:
                 fontsize=12,
             )
             fig.tight_layout()
-            fig.savefig(path)
+            fig.savefig(path, format="png" if isinstance(path, io.BytesIO) else None)
         finally:
             plt.close(fig)
 
@@ -1171,15 +1180,12 @@ class BatchSummary:
 
         p = Path(path)
         text = "\n".join(self.lines())
-        picture: Path | None = None
-        if self.labelled:
-            picture = p.with_name(p.stem + "-confusion.png")
-            self.plot_confusion(picture)
         if p.suffix.lower() in (".html", ".htm"):
             image = ""
-            if picture is not None:
-                data = base64.b64encode(picture.read_bytes()).decode("ascii")
-                picture.unlink()
+            if self.labelled:
+                buffer = io.BytesIO()
+                self.plot_confusion(buffer)
+                data = base64.b64encode(buffer.getvalue()).decode("ascii")
                 image = f'<img alt="confusion matrix" src="data:image/png;base64,{data}">\n'
             body = (
                 f'<!doctype html>\n<html><head><meta charset="utf-8"><title>{html.escape(title)}'
@@ -1187,7 +1193,11 @@ class BatchSummary:
                 f"<pre>{html.escape(text)}</pre>\n</body></html>\n"
             )
         else:
-            image = f"![confusion matrix]({picture.name})\n\n" if picture is not None else ""
+            image = ""
+            if self.labelled:
+                picture = p.with_name(p.stem + "-confusion.png")
+                self.plot_confusion(picture)
+                image = f"![confusion matrix]({picture.name})\n\n"
             body = f"# {title}\n\n{image}```text\n{text}\n```\n"
         p.write_text(body, encoding="utf-8")
 
