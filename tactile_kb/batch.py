@@ -687,7 +687,7 @@ def _dask_results(
     limit = in_flight or max(2, 2 * sum(client.nthreads().values()))
     run = f"tactile-kb-{os.getpid()}-{time.time_ns()}"
     pending: dict[str, tuple[Task, Any]] = {}
-    futures = distributed.as_completed()
+    futures = distributed.as_completed(loop=client.loop)
 
     def submit() -> bool:
         task = next(tasks, None)
@@ -1115,10 +1115,10 @@ class BatchSummary:
             for e, (right, total) in self.accuracy().items():
                 right_all += right
                 total_all += total
-                out.append(f"  {e:<{head}}  {right:>5}/{total:<5} {100 * right / total:6.1f} %")
+                out.append(f"  {e:<{head}}  {right:>6} of {total:<6} {100 * right / total:5.1f} %")
             out.append(
-                f"  {'all':<{head}}  {right_all:>5}/{total_all:<5} "
-                f"{100 * right_all / total_all:6.1f} %"
+                f"  {'all':<{head}}  {right_all:>6} of {total_all:<6} "
+                f"{100 * right_all / total_all:5.1f} %"
             )
         return out
 

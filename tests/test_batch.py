@@ -198,7 +198,7 @@ def test_batch_with_labels_corrupt_file_and_missing_path(dataset: Path, tmp_path
     lines = summary.lines()
     assert lines[0] == "12 results: 8 answered, 4 failed"
     assert "  ObjectError       4" in lines
-    assert lines[-1].split() == ["all", "8/12", "66.7", "%"]
+    assert lines[-1].split() == ["all", "8", "of", "12", "66.7", "%"]
 
 
 def test_same_seeds_same_answers_on_one_or_two_workers(dataset: Path) -> None:
