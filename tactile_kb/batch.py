@@ -485,24 +485,30 @@ def _worker_main(conn: Any, work: str) -> None:  # pragma: no cover - runs in a 
 
 
 @contextlib.contextmanager
-def _no_unimportable_main() -> Iterator[None]:
-    """Hide a ``__main__`` read from stdin (``python - <<EOF``) from new workers.
+def _without_main(work: str) -> Iterator[None]:
+    """Start workers without the driver's main script.
 
-    A new worker re-imports the driver's main script by its path; a script read from stdin
-    has none, and the worker would die on start. The workers never need it.
+    A new worker of the spawn and fork-server kinds re-runs the driver's ``__main__`` (by path
+    or module name) before it starts: a script without an ``if __name__ == "__main__":`` guard
+    would run again in every worker, and a script read from stdin cannot be found at all. The
+    workers run only library code, so ``__main__`` is hidden from them while they start (unless
+    the work function itself lives there).
     """
     import sys
 
     main = sys.modules.get("__main__")
-    path = getattr(main, "__file__", None)
-    if main is None or path is None or os.path.isfile(path):
+    if main is None or work.startswith("__main__:"):
         yield
         return
-    del main.__file__
+    saved: dict[str, Any] = {
+        name: main.__dict__[name] for name in ("__file__", "__spec__") if name in main.__dict__
+    }
+    main.__dict__.pop("__file__", None)
+    main.__dict__["__spec__"] = None  # as for `python -c`
     try:
         yield
     finally:
-        main.__file__ = path
+        main.__dict__.update(saved)
 
 
 class _Slot:
@@ -511,7 +517,7 @@ class _Slot:
     def __init__(self, ctx: Any, work: str) -> None:
         parent, child = ctx.Pipe()
         self.process = ctx.Process(target=_worker_main, args=(child, work), daemon=True)
-        with _no_unimportable_main():
+        with _without_main(work):
             self.process.start()
         child.close()
         self.conn = parent
@@ -926,6 +932,20 @@ def _prepare_stream(path: Path) -> set[str]:
     return {key for key, ok in done.items() if ok}
 
 
+def _plain(value: Any) -> Any:
+    """A JSON-ready stand-in for a value json cannot write (a numpy scalar or array)."""
+    if hasattr(value, "tolist"):
+        return value.tolist()
+    if hasattr(value, "item"):
+        return value.item()
+    return str(value)
+
+
+def _line(row: Row) -> bytes:
+    """One results line: the row as JSON, newline-terminated."""
+    return (json.dumps(row, ensure_ascii=False, default=_plain) + "\n").encode("utf-8")
+
+
 class _Appender:
     """Appends whole lines, each flushed and synced, so that a kill leaves at most a torn last line."""
 
@@ -933,7 +953,7 @@ class _Appender:
         self._fd = os.open(path, os.O_WRONLY | os.O_APPEND | os.O_CREAT, 0o644)
 
     def write(self, row: Row) -> None:
-        data = (json.dumps(row, ensure_ascii=False) + "\n").encode("utf-8")
+        data = _line(row)
         view = memoryview(data)
         while view:
             written = os.write(self._fd, view)
@@ -989,7 +1009,7 @@ def _finish(stream: Path, out: Path, index_of: Mapping[str, int], summary: Batch
             else:
                 for row in rows:
                     summary.add(row)
-                    dst.write((json.dumps(row, ensure_ascii=False) + "\n").encode("utf-8"))
+                    dst.write(_line(row))
             dst.flush()
             os.fsync(dst.fileno())
         os.replace(tmp, out)  # for Parquet the stream beside it stays: --resume reads it
@@ -1023,7 +1043,9 @@ def _write_parquet(dst: Any, rows: Iterator[Row], summary: BatchSummary) -> None
     for row in rows:
         summary.add(row)
         flat = {
-            k: json.dumps(v, ensure_ascii=False) if isinstance(v, dict | list) else v
+            k: json.dumps(v, ensure_ascii=False, default=_plain)
+            if isinstance(v, dict | list)
+            else v
             for k, v in row.items()
         }
         for k in flat:
