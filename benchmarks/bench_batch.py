@@ -141,31 +141,38 @@ def main() -> int:
         # Baseline: today's classify(), one object after another, in this process. It runs
         # before and after the batches; their mean is the baseline, so that a change in the
         # machine's other load during the run weighs on both sides alike.
-        def baseline_run() -> tuple[float, list[str]]:
-            t0 = time.perf_counter()
-            labels = [classify(item.path, rules=kb).decision.label for item in items]
-            return time.perf_counter() - t0, labels
+        cpu: dict[str, tuple[float, float, float]] = {}  # name → (driver, workers, busiest)
 
-        before, baseline = baseline_run()
+        def baseline_run() -> tuple[float, float, list[str]]:
+            t0, c0 = time.perf_counter(), time.process_time()
+            labels = [classify(item.path, rules=kb).decision.label for item in items]
+            return time.perf_counter() - t0, time.process_time() - c0, labels
+
+        before, base_cpu, baseline = baseline_run()
         right = sum(b == item.label for b, item in zip(baseline, items, strict=True))
         print(
             f"\n{args.objects} objects, baseline (classify() one by one, one process): "
-            f"{before:.1f} s, {_per_minute(args.objects, before):.0f} objects/min "
-            f"({right}/{args.objects} labels right)"
+            f"{before:.1f} s, {_per_minute(args.objects, before):.0f} objects/min, "
+            f"{base_cpu:.1f} s of CPU ({right}/{args.objects} labels right)"
         )
         results: dict[str, float] = {}
 
         def timed(name: str, **options: Any) -> float:
             out = root / f"{name}.jsonl"
-            t = time.perf_counter()
+            t, c = time.perf_counter(), time.process_time()
             rows: list[dict[str, Any]] = []
             run_batch(items, out, rules=RULES, on_row=rows.append, **options)
-            seconds = time.perf_counter() - t
+            seconds, driver = time.perf_counter() - t, time.process_time() - c
             labels = {r["index"]: r.get("label") for r in rows}
             differ = sum(labels[i] != b for i, b in enumerate(baseline))
+            per_worker: dict[str, float] = {}
+            for r in rows:
+                per_worker[r["worker"]] = per_worker.get(r["worker"], 0.0) + r["cpu_seconds"]
+            cpu[name] = (driver, sum(per_worker.values()), max(per_worker.values()))
             print(
                 f"  {name:<22} {seconds:6.1f} s {_per_minute(args.objects, seconds):6.0f} "
-                f"objects/min" + (f"  ({differ} answers differ!)" if differ else "  (same answers)")
+                f"objects/min; CPU: driver {driver:.1f} s, workers {cpu[name][1]:.1f} s"
+                + (f"  ({differ} answers differ!)" if differ else "  (same answers)")
             )
             return seconds
 
@@ -190,8 +197,9 @@ def main() -> int:
                 ):
                     print(f"  (Dask LocalCluster start-up: {time.perf_counter() - t:.1f} s)")
                     results["Dask, 2 workers"] = timed("Dask, 2 workers", client=client)
-        after, again = baseline_run()
+        after, after_cpu, again = baseline_run()
         base_s = (before + after) / 2
+        base_cpu = (base_cpu + after_cpu) / 2
         print(
             f"  baseline again: {after:.1f} s ({'same' if again == baseline else 'other'} "
             f"answers); mean baseline {base_s:.1f} s, "
@@ -207,6 +215,16 @@ def main() -> int:
         if "Dask, 2 workers" in results:
             dask = results["Dask, 2 workers"]
             print(f"  Dask speedup at 2 workers: {base_s / dask:.2f}×")
+        # CPU times do not depend on what else the machine runs: the work a batch adds, and
+        # the wall time it would take with a core per worker (its busiest worker, the driver
+        # running alongside), against the baseline's CPU time.
+        print(f"  from CPU times (load-independent; baseline {base_cpu:.1f} s of CPU):")
+        for name, (driver, workers, busiest) in cpu.items():
+            print(
+                f"    {name:<22} CPU overhead {100 * (driver + workers - base_cpu) / base_cpu:+.1f} %"
+                f" (driver {driver:.1f} s); with a free core per worker: "
+                f"×{base_cpu / max(busiest, driver):.2f}"
+            )
 
         # Driver memory over many tiny objects (stand-in work, see the docstring).
         tiny = root / "tiny"

@@ -12,14 +12,14 @@ A result row holds the keys of ``tactile-kb classify --json``
 ``{"object": …, "error": {"kind": …, "message": …}}``; and in both cases ``index`` (the stable
 position of the (object, seed) pair in the inputs), ``seed``, ``key`` (what ``--resume`` matches:
 the path, the file's content hash and the options), ``options``, ``expected`` and ``correct``
-(with a label), ``task_seconds`` and ``worker``.
+(with a label), ``task_seconds``, ``cpu_seconds`` and ``worker``.
 
 Execution
 ---------
 * Local workers (the default) are processes of the standard library's ``multiprocessing``, each
-  running one task at a time, so that a task that crashes or kills its process, or runs past its
+  running one task at a time with the next one waiting in its pipe, so that a task that crashes or kills its process, or runs past its
   timeout (the process is killed), becomes an error row of kind ``WorkerLost`` or ``Timeout``
-  and a fresh process takes the next task. Tasks in flight are bounded by the worker count.
+  and a fresh process takes the tasks queued behind it. Tasks in flight: twice the workers.
 * A ``dask.distributed.Client`` runs the tasks on its cluster with a bounded number of futures
   in flight. Workers read meshes by path (a shared filesystem) unless ``ship=True`` sends the
   bytes with each task.
@@ -38,6 +38,7 @@ Examples
 
 from __future__ import annotations
 
+import collections
 import contextlib
 import csv
 import glob
@@ -386,7 +387,14 @@ def _worker_name() -> str:
     return f"{socket.gethostname()}:{os.getpid()}"
 
 
-def _finish_row(task: Task, row: Row, started: float) -> Row:
+def _finish_row(
+    task: Task,
+    row: Row,
+    started: float,
+    *,
+    cpu_started: float | None = None,
+    worker: str | None = None,
+) -> Row:
     out: Row = {"index": task["index"], "seed": task["seed"], **row}
     out["object"] = task["object"]
     expected = task.get("expected")
@@ -396,12 +404,23 @@ def _finish_row(task: Task, row: Row, started: float) -> Row:
     out["options"] = task["options"]
     out["key"] = task["key"]
     out["task_seconds"] = round(time.perf_counter() - started, 4)
-    out["worker"] = _worker_name()
+    if cpu_started is not None:
+        out["cpu_seconds"] = round(time.process_time() - cpu_started, 4)
+    out["worker"] = worker or _worker_name()
     return out
 
 
-def _failed(task: Task, kind: str, message: str, started: float) -> Row:
-    return _finish_row(task, error_summary(task["object"], kind, message), started)
+def _failed(
+    task: Task,
+    kind: str,
+    message: str,
+    started: float,
+    *,
+    cpu_started: float | None = None,
+    worker: str | None = None,
+) -> Row:
+    row = error_summary(task["object"], kind, message)
+    return _finish_row(task, row, started, cpu_started=cpu_started, worker=worker)
 
 
 _FINGERS: dict[str, Any] = {}
@@ -413,6 +432,7 @@ def run_task(task: Task) -> Row:
     This is what a worker runs: a local worker process or a Dask worker thread.
     """
     started = time.perf_counter()
+    cpu = time.process_time()
     try:
         from tactile_kb.finger import load_finger
         from tactile_kb.pipeline import classify, knowledge_base
@@ -449,15 +469,14 @@ def run_task(task: Task) -> Row:
                     )
                 except Exception as exc:
                     message = str(exc).replace(copy, task["object"])
-                    return _failed(task, type(exc).__name__, message, started)
+                    return _failed(task, type(exc).__name__, message, started, cpu_started=cpu)
         row = result.summary()
     except Exception as exc:  # any failure of one object is its row, never the batch's end
         message = str(exc) or type(exc).__name__
         name = task["object"]
-        return _failed(
-            task, type(exc).__name__, message if name in message else f"{name}: {message}", started
-        )
-    return _finish_row(task, row, started)
+        message = message if name in message else f"{name}: {message}"
+        return _failed(task, type(exc).__name__, message, started, cpu_started=cpu)
+    return _finish_row(task, row, started, cpu_started=cpu)
 
 
 def _resolve(work: str) -> Callable[[Task], Row]:
@@ -512,7 +531,7 @@ def _without_main(work: str) -> Iterator[None]:
 
 
 class _Slot:
-    """One local worker process and the task it runs."""
+    """One local worker process and the tasks sent to it, the first one running."""
 
     def __init__(self, ctx: Any, work: str) -> None:
         parent, child = ctx.Pipe()
@@ -521,13 +540,20 @@ class _Slot:
             self.process.start()
         child.close()
         self.conn = parent
-        self.task: Task | None = None
+        self.tasks: collections.deque[Task] = collections.deque()
         self.started = 0.0
+        """When the first task started (when the one before it finished)."""
+        self.name = f"{socket.gethostname()}:{self.process.pid}"
 
     def send(self, task: Task) -> None:
-        self.task = task
-        self.started = time.perf_counter()
         self.conn.send(task)
+        if not self.tasks:
+            self.started = time.perf_counter()
+        self.tasks.append(task)
+
+    def done(self) -> Task:
+        self.started = time.perf_counter()
+        return self.tasks.popleft()
 
     def stop(self, *, kill: bool = False) -> None:
         if kill:
@@ -555,87 +581,110 @@ def _mp_context() -> Any:
     return multiprocessing.get_context("spawn")  # pragma: no cover - Windows
 
 
-def _local_results(tasks: Iterator[Task], workers: int, work: str) -> Iterator[Row]:
+def _local_results(tasks: Iterator[Task], workers: int, work: str, depth: int = 2) -> Iterator[Row]:
+    """Run ``tasks`` on ``workers`` processes, each sent up to ``depth`` tasks ahead.
+
+    The second task waits in the worker's pipe, so that a worker never idles while the driver
+    writes a row. When a worker dies or is stopped, its running task is an error row and the
+    tasks queued behind it go to the other workers.
+    """
     from multiprocessing.connection import wait
 
     ctx = _mp_context()
-    idle: list[_Slot] = []
-    busy: list[_Slot] = []
-    started = 0
+    slots: list[_Slot] = []
+    retry: collections.deque[Task] = collections.deque()
     exhausted = False
+
+    def next_task() -> Task | None:
+        nonlocal exhausted
+        if retry:
+            return retry.popleft()
+        if exhausted:
+            return None
+        task = next(tasks, None)
+        exhausted = task is None
+        return task
+
+    def drop(slot: _Slot) -> Task:
+        """Stop ``slot``'s process; return its running task, requeue the others."""
+        slots.remove(slot)
+        slot.stop(kill=True)
+        running = slot.tasks.popleft()
+        retry.extendleft(reversed(slot.tasks))
+        return running
+
     try:
         while True:
-            while not exhausted and (idle or started < workers):
-                task = next(tasks, None)
+            while True:  # fill: a new worker while there are fewer than asked, then queues
+                if len(slots) < workers and all(slot.tasks for slot in slots):
+                    target = None
+                else:
+                    target = min(slots, key=lambda slot: len(slot.tasks), default=None)
+                    if target is not None and len(target.tasks) >= depth:
+                        break
+                task = next_task()
                 if task is None:
-                    exhausted = True
                     break
-                slot = idle.pop() if idle else None
-                if slot is None:
-                    slot = _Slot(ctx, work)
-                    started += 1
+                if target is None:
+                    target = _Slot(ctx, work)
+                    slots.append(target)
                 try:
-                    slot.send(task)
-                except OSError:  # an idle worker was killed: a fresh one takes the task
-                    slot.stop(kill=True)
-                    slot = _Slot(ctx, work)
-                    slot.send(task)
-                busy.append(slot)
+                    target.send(task)
+                except OSError:  # the worker was killed while it waited: a fresh one
+                    retry.extendleft(reversed(target.tasks))
+                    retry.appendleft(task)
+                    slots.remove(target)
+                    target.stop(kill=True)
+            busy = [slot for slot in slots if slot.tasks]
             if not busy:
                 return
             now = time.perf_counter()
             deadlines = [
-                s.started + s.task["timeout"] - now
-                for s in busy
-                if s.task is not None and s.task.get("timeout")
+                slot.started + slot.tasks[0]["timeout"] - now
+                for slot in busy
+                if slot.tasks[0].get("timeout")
             ]
             wait_for = max(0.0, min(deadlines)) if deadlines else None
-            ready = set(wait([s.conn for s in busy] + [s.process.sentinel for s in busy], wait_for))
-            for slot in list(busy):
-                task = slot.task
-                assert task is not None
-                row: Row | None = None
+            handles = [slot.conn for slot in busy] + [slot.process.sentinel for slot in busy]
+            ready = set(wait(handles, wait_for))
+            for slot in busy:
                 if slot.conn in ready or slot.process.sentinel in ready:
+                    row: Row | None = None
                     try:
                         if slot.conn.poll():
                             row = slot.conn.recv()
                     except (EOFError, OSError):
                         row = None
-                    if row is None:  # the process ended without an answer
-                        slot.process.join(timeout=1)
-                        code = slot.process.exitcode
-                        busy.remove(slot)
-                        slot.stop(kill=True)
-                        started -= 1
-                        yield _failed(
-                            task,
-                            "WorkerLost",
-                            f"{task['object']}: the worker process ended while classifying it "
-                            f"(exit code {code})",
-                            slot.started,
-                        )
+                    if row is not None:
+                        slot.done()
+                        yield row
                         continue
-                    busy.remove(slot)
-                    slot.task = None
-                    idle.append(slot)
-                    yield row
+                    slot.process.join(timeout=1)  # the process ended without an answer
+                    code = slot.process.exitcode
+                    task = drop(slot)
+                    how = f"killed by signal {-code}" if code and code < 0 else f"exit code {code}"
+                    yield _failed(
+                        task,
+                        "WorkerLost",
+                        f"{task['object']}: the worker process ended while classifying it ({how})",
+                        slot.started,
+                        worker=slot.name,
+                    )
                     continue
-                limit = task.get("timeout")
+                limit = slot.tasks[0].get("timeout")
                 if limit and time.perf_counter() - slot.started >= limit:
-                    busy.remove(slot)
-                    slot.stop(kill=True)
-                    started -= 1
+                    task = drop(slot)
                     yield _failed(
                         task,
                         "Timeout",
-                        f"{task['object']}: not classified within {limit:g} s (the worker was stopped)",
+                        f"{task['object']}: not classified within {limit:g} s "
+                        "(the worker was stopped)",
                         slot.started,
+                        worker=slot.name,
                     )
     finally:
-        for slot in busy:
-            slot.stop(kill=True)
-        for slot in idle:
-            slot.stop()
+        for slot in slots:
+            slot.stop(kill=bool(slot.tasks))
 
 
 # --- Dask ---------------------------------------------------------------------------------------
@@ -826,7 +875,7 @@ def classify_many(
         Called with each task's key; tasks it accepts are not run (``run_batch``'s resume).
     in_flight
         With ``client``: at most this many tasks submitted and unfinished (default: twice
-        the cluster's threads). Local workers run one task each.
+        the cluster's threads). Local workers hold two tasks each.
 
     Everything shared by the objects (rule files, fingers, explorers) is checked before the
     first task starts; a failure there raises. The rows come in the order tasks finish; their
