@@ -581,7 +581,9 @@ def _mp_context() -> Any:
     return multiprocessing.get_context("spawn")  # pragma: no cover - Windows
 
 
-def _local_results(tasks: Iterator[Task], workers: int, work: str, depth: int = 2) -> Iterator[Row]:
+def _local_results(
+    tasks: Iterator[Task], workers: int, work: str, depth: int = 2
+) -> Generator[Row, None, None]:
     """Run ``tasks`` on ``workers`` processes, each sent up to ``depth`` tasks ahead.
 
     The second task waits in the worker's pipe, so that a worker never idles while the driver
@@ -732,7 +734,7 @@ def _run_guarded(task: Task, work: str) -> Row:
 
 def _dask_results(
     tasks: Iterator[Task], client: Any, work: str, in_flight: int | None
-) -> Iterator[Row]:
+) -> Generator[Row, None, None]:
     try:
         distributed: Any = importlib.import_module("distributed")
     except ImportError:  # pragma: no cover - the client came from somewhere
@@ -877,11 +879,14 @@ def classify_many(
         With ``client``: at most this many tasks submitted and unfinished (default: twice
         the cluster's threads). Local workers hold two tasks each.
 
-    Everything shared by the objects (rule files, fingers, explorers) is checked before the
-    first task starts; a failure there raises. The rows come in the order tasks finish; their
-    ``index`` gives the input order.
+    The inputs and everything shared by the objects (rule files, fingers, explorers) are
+    checked when this is called, before any task starts; a problem raises here. The rows come
+    in the order tasks finish; their ``index`` gives the input order.
     """
     defaults = _defaults(rules, explorer, finger, noise, seeds, timeout)
+    count = workers if workers is not None else (os.cpu_count() or 1)
+    if count < 1:
+        raise UsageError(f"workers must be ≥ 1, got {count}")
     items = expand_inputs(inputs)
     _check_options(items, defaults)
     tasks = _tasks(
@@ -893,12 +898,8 @@ def classify_many(
         index_of=_index_of,
     )
     if client is not None:
-        yield from _dask_results(tasks, client, _work, in_flight)
-        return
-    count = workers if workers is not None else (os.cpu_count() or 1)
-    if count < 1:
-        raise UsageError(f"workers must be ≥ 1, got {count}")
-    yield from _local_results(tasks, count, _work)
+        return _dask_results(tasks, client, _work, in_flight)
+    return _local_results(tasks, count, _work)
 
 
 # --- results files ------------------------------------------------------------------------------
@@ -1293,17 +1294,17 @@ def run_batch(
     """
     path = check_output(out, resume=resume, overwrite=overwrite)
     stream = _stream_path(path)
-    if overwrite and not resume:
-        stream.unlink(missing_ok=True)
     done = _prepare_stream(stream) if resume else set()
     index_of: dict[str, int] = {}
-    rows = classify_many(
+    rows = classify_many(  # checks the inputs and options: nothing is touched before
         inputs,
         skip=done.__contains__,
         _on_skip=on_skip,
         _index_of=index_of,
         **options,
     )
+    if overwrite and not resume:
+        stream.unlink(missing_ok=True)
     appender: _Appender | None = None
     try:
         for row in rows:

@@ -403,3 +403,17 @@ def test_dask_timeout_and_resume_to_a_file(tmp_path: Path, client: Any) -> None:
     )
     assert ran == []
     assert [json.loads(line)["index"] for line in out.read_text().splitlines()] == [0, 1]
+
+
+def test_problems_raise_at_the_call_and_overwrite_waits_for_them(
+    dataset: Path, tmp_path: Path
+) -> None:
+    with pytest.raises(UsageError, match="nope"):
+        classify_many([dataset / "a"], rules="nope")  # raised before any row is asked for
+    with pytest.raises(UsageError, match="workers must be ≥ 1"):
+        classify_many([dataset / "a"], workers=0)
+    out = tmp_path / "r.jsonl"
+    out.write_text('{"key": "x"}\n')
+    with pytest.raises(UsageError, match="no file matches"):
+        run_batch([str(tmp_path / "nothing-*.stl")], out, overwrite=True)
+    assert out.read_text() == '{"key": "x"}\n'  # the old results are kept
