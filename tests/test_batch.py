@@ -417,3 +417,27 @@ def test_problems_raise_at_the_call_and_overwrite_waits_for_them(
     with pytest.raises(UsageError, match="no file matches"):
         run_batch([str(tmp_path / "nothing-*.stl")], out, overwrite=True)
     assert out.read_text() == '{"key": "x"}\n'  # the old results are kept
+
+
+def test_a_dask_worker_killed_mid_batch_loses_nothing(dataset: Path, client: Any) -> None:
+    """Dask moves the tasks of a dead worker to the other one: every row is an answer."""
+    killed: list[str] = []
+
+    def kill_first_worker(row: dict[str, Any]) -> None:
+        if not killed:
+            killed.append(row["worker"])
+            os.kill(int(row["worker"].rsplit(":", 1)[1]), signal.SIGKILL)
+
+    rows = []
+    for row in classify_many(
+        [dataset / "a", dataset / "b" / "prism5.stl"],
+        rules="polyhedra",
+        seeds=(0, 1),
+        client=client,
+        in_flight=6,
+    ):
+        kill_first_worker(row)
+        rows.append(row)
+    assert sorted(r["index"] for r in rows) == list(range(6))
+    assert not any("error" in r for r in rows)
+    client.wait_for_workers(2, timeout=60)  # the nanny restarts it for the tests after

@@ -166,12 +166,20 @@ def _batch(args: argparse.Namespace) -> int:
 
     from tqdm import tqdm
 
+    terminal = sys.stderr.isatty()
+    try:  # a terminal that reports no size (a bare pty) gets 80 × 24; tqdm draws nothing in 0 × 0
+        size = os.get_terminal_size(sys.stderr.fileno()) if terminal else None
+    except OSError:
+        size = None
+    sized = size is not None and size.columns > 0 and size.lines > 0
     bar = tqdm(
         total=total,
         unit="obj",
         file=sys.stderr,
-        disable=not sys.stderr.isatty(),
-        dynamic_ncols=True,
+        disable=not terminal,
+        dynamic_ncols=sized,
+        ncols=None if sized else 80,
+        nrows=None if sized else 24,
     )
     errors = 0
 
