@@ -256,21 +256,25 @@ def test_a_killed_worker_is_an_error_row_and_resume_redoes_it(
 
 def test_resume_after_a_kill_mid_line(dataset: Path, tmp_path: Path) -> None:
     out = tmp_path / "r.jsonl"
-    inputs = [dataset / "a"]
-    run_batch(inputs, out, rules="polyhedra", seeds=(0, 1, 2), workers=2)
+    inputs = [dataset / "a"]  # brick.stl, cube.stl
+    run_batch(inputs, out, rules="polyhedra", seeds=(0, 1), workers=2)
     lines = out.read_bytes().splitlines(keepends=True)
     # A batch killed after two rows and halfway through writing a third:
-    out.write_bytes(lines[3] + lines[0] + lines[5][: len(lines[5]) // 2])
+    out.write_bytes(lines[3] + lines[0] + lines[2][: len(lines[2]) // 2])
     ran: list[dict[str, Any]] = []
     run_batch(
-        inputs, out, resume=True, rules="polyhedra", seeds=(0, 1, 2), workers=2, on_row=ran.append
+        inputs, out, resume=True, rules="polyhedra", seeds=(0, 1), workers=2, on_row=ran.append
     )
-    assert sorted(r["index"] for r in ran) == [1, 2, 4, 5]
+    assert sorted(r["index"] for r in ran) == [1, 2]
     rows = list(read_results(out))
-    assert [r["index"] for r in rows] == list(range(6))
-    assert all(r["label"] in ("cube", "rectangular_parallelepiped") for r in rows)
-    again = run_batch(inputs, out, resume=True, rules="polyhedra", seeds=(0, 1, 2), workers=1)
-    assert again.rows == 6  # nothing left to do, the summary covers the whole file
+    assert [(r["index"], r["label"]) for r in rows] == [
+        (0, "rectangular_parallelepiped"),
+        (1, "rectangular_parallelepiped"),
+        (2, "cube"),
+        (3, "cube"),
+    ]
+    again = run_batch(inputs, out, resume=True, rules="polyhedra", seeds=(0, 1), workers=1)
+    assert again.rows == 4  # nothing left to do, the summary covers the whole file
 
 
 def test_a_changed_file_is_classified_again_on_resume(tmp_path: Path) -> None:
