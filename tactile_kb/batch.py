@@ -934,21 +934,17 @@ def read_results(path: str | Path) -> Iterator[Row]:
     """
     p = Path(path)
     if p.suffix.lower() == ".parquet":
-        pq = _pyarrow()
-        for row in pq.read_table(p).to_pylist():
-            yield {k: _decode(v) for k, v in row.items() if v is not None}
+        table = _pyarrow().read_table(p)
+        nested = set(json.loads((table.schema.metadata or {}).get(_JSON_COLUMNS, b"[]")))
+        for row in table.to_pylist():
+            yield {
+                k: json.loads(v) if k in nested and v is not None else v
+                for k, v in row.items()
+                if v is not None
+            }
         return
     for _, _, row in _scan(p):
         yield row
-
-
-def _decode(value: Any) -> Any:
-    if isinstance(value, str) and value[:1] in "{[":
-        try:
-            return json.loads(value)
-        except json.JSONDecodeError:
-            return value
-    return value
 
 
 def _pyarrow() -> Any:
@@ -1079,9 +1075,14 @@ def _sorted_rows(
         yield row
 
 
+_JSON_COLUMNS = b"tactile_kb.json_columns"
+"""Parquet schema metadata: the columns that hold JSON text (nested values)."""
+
+
 def _write_parquet(dst: Any, rows: Iterator[Row], summary: BatchSummary) -> None:
     """Rows in Parquet: scalars as columns, nested values (dicts, lists) as JSON text.
 
+    The columns holding JSON are listed in the schema metadata, for :func:`read_results`.
     The table is built in memory (one column set for all rows); the JSONL stream is the
     flat-memory path.
     """
@@ -1089,20 +1090,24 @@ def _write_parquet(dst: Any, rows: Iterator[Row], summary: BatchSummary) -> None
     pa: Any = importlib.import_module("pyarrow")
 
     names: list[str] = []
-    flat_rows: list[dict[str, Any]] = []
+    nested: set[str] = set()
+    buffered: list[Row] = []
     for row in rows:
         summary.add(row)
-        flat = {
-            k: json.dumps(v, ensure_ascii=False, default=_plain)
-            if isinstance(v, dict | list)
-            else v
-            for k, v in row.items()
-        }
-        for k in flat:
+        for k, v in row.items():
             if k not in names:
                 names.append(k)
-        flat_rows.append(flat)
-    table = pa.Table.from_pylist([{n: r.get(n) for n in names} for r in flat_rows])
+            if isinstance(v, dict | list):
+                nested.add(k)
+        buffered.append(row)
+
+    def cell(name: str, value: Any) -> Any:
+        if value is None or name not in nested:
+            return value
+        return json.dumps(value, ensure_ascii=False, default=_plain)
+
+    table = pa.Table.from_pylist([{n: cell(n, r.get(n)) for n in names} for r in buffered])
+    table = table.replace_schema_metadata({_JSON_COLUMNS: json.dumps(sorted(nested))})
     pq.write_table(table, dst)
 
 
