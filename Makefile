@@ -13,9 +13,10 @@ $(STAMP): pyproject.toml
 	@test -x $(BIN)/python || { echo ">> creating the virtual environment $(VENV)"; $(PYTHON) -m venv $(VENV); }
 	@echo ">> installing tactile-kb into $(VENV) with its dependencies (numpy, scipy, sympy, dd,"
 	@echo ">> trimesh, matplotlib, ...) and the development tools (pytest, hypothesis, ruff, mypy,"
-	@echo ">> mkdocs): a few minutes the first time, seconds afterwards"
+	@echo ">> mkdocs) and the batch extras (dask, distributed, pyarrow): a few minutes the first"
+	@echo ">> time, seconds afterwards"
 	$(BIN)/python -m pip install --upgrade pip
-	$(BIN)/python -m pip install -e ".[dev]"
+	$(BIN)/python -m pip install -e ".[dev,dask,parquet]"
 	@touch $(STAMP)
 	@echo ">> installed; the next runs reuse $(VENV)"
 

@@ -37,7 +37,12 @@ from tactile_kb.errors import (
 
 __all__ = ["main"]
 
-COMMAND_MODULES = ("tactile_kb.cli.kb", "tactile_kb.cli.explore", "tactile_kb.cli.grasp")
+COMMAND_MODULES = (
+    "tactile_kb.cli.kb",
+    "tactile_kb.cli.explore",
+    "tactile_kb.cli.grasp",
+    "tactile_kb.cli.batch",
+)
 
 EXIT_OK, EXIT_FAILED, EXIT_USAGE, EXIT_INTERNAL = 0, 1, 2, 3
 
