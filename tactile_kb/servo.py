@@ -76,6 +76,16 @@ _Z = np.array([0.0, 0.0, 1.0])
 CURVED_RUN = 3
 """Edge touches in a row (each rolling off within ``edge_slide``) that mean a curved surface."""
 
+RIDE_STEP = 0.8
+"""How far (in tip radii) a ride over an irregularity steps on before pressing back: far enough
+that the press, ``bump`` deeper than the surface, misses a real convex edge (√(2ρb − b²) for a
+right angle and a bump b ≤ ρ / 4: 0.66 ρ)."""
+
+RIDE_DEG = 20.0
+"""Degrees: a touch while riding over an irregularity (:meth:`Controller._ride`) whose sensors
+point this close to the surface's normal is the surface followed (a real face turns further at
+an edge: 30° and more between the faces of a 12-sided prism)."""
+
 
 @dataclass(frozen=True)
 class ServoParams:
@@ -117,6 +127,14 @@ class ServoParams:
         middle (a rectangle of slides, so that the top's tip centres span it).
     approach_margin
         Free space kept outside the hint box when approaching.
+    comply
+        Ride over small irregularities of a surface slid along, as a finger under force
+        control does (see :meth:`Controller._ride`): a slide stopped without a sensor change
+        backs off, steps over and presses on again; a slide that loses the surface presses
+        back onto it. Off: the paper's rules alone (a blocked slide ends the contour).
+    bump
+        The largest irregularity (bump, ripple, relief) ridden over, metres; ``None``:
+        ρ / 4 (1.25 mm for the 5 mm tip).
     max_motions
         Hard budget of motions for a whole exploration.
     max_layer_motions
@@ -136,6 +154,8 @@ class ServoParams:
     top: bool = True
     top_spread: float = 0.45
     approach_margin: float = 0.01
+    comply: bool = True
+    bump: float | None = None
     max_motions: int = 3000
     max_layer_motions: int = 400
     max_layers: int = 40
@@ -145,7 +165,7 @@ class ServoParams:
             v = getattr(self, name)
             if not (math.isfinite(v) and v > 0):
                 raise UsageError(f"servo parameter {name} must be > 0 metres, got {v}")
-        for name in ("z_step", "z_first", "spacing", "edge_slide"):
+        for name in ("z_step", "z_first", "spacing", "edge_slide", "bump"):
             v = getattr(self, name)
             if v is not None and not (math.isfinite(v) and v > 0):
                 raise UsageError(f"servo parameter {name} must be > 0 metres or None, got {v}")
@@ -219,6 +239,7 @@ class Controller:
         size = hint.size
         self.spacing = self.params.spacing or max(0.0015, math.hypot(size[0], size[1]) / 30.0)
         self.edge_slide = self.params.edge_slide or 0.5 * self.rho
+        self.bump = self.params.bump or 0.25 * self.rho
         self.reach = float(
             math.hypot(size[0], size[1]) + 2 * (self.rho + self.params.approach_margin)
         )
@@ -228,6 +249,7 @@ class Controller:
         self.notes: list[str] = []
         self.motions = 0
         self.rereads = 0  # touches recovered by reading the sensors again at rest
+        self.rides = 0  # irregularities ridden over while sliding
         self._layer_motions = 0
         self._phase = "first-contact"
         self._layer: int | None = None
@@ -342,6 +364,7 @@ class Controller:
             z_first=self.z_first,
             spacing=self.spacing,
             edge_slide=self.edge_slide,
+            bump=self.bump,
         )
         params.update(self.extra_params)
         return ExplorationRecord(
@@ -362,7 +385,8 @@ class Controller:
                 [f"{self.rereads} lost sensor signal(s) recovered by reading the sensors at rest"]
                 if self.rereads
                 else []
-            ),
+            )
+            + ([f"{self.rides} surface irregularities ridden over"] if self.rides else []),
         )
 
     # the exploration ---------------------------------------------------------------------------
@@ -470,16 +494,101 @@ class Controller:
         self, pos: FArray, direction: FArray, f: _Follow, length: float
     ) -> tuple[Motion, float]:
         """Slide up to ``length`` along the surface under ``f``, recording a ``"slide"`` contact
-        every :attr:`spacing`; the last motion (not recorded) and the distance travelled."""
+        every :attr:`spacing`; the last motion (not recorded) and the distance travelled.
+
+        With ``comply`` on, a slide that stops before the surface ends (a bump blocks it, or
+        the surface recedes a little) rides over the irregularity (:meth:`_ride`) and goes on.
+        """
         travelled = 0.0
+        start = np.asarray(pos, dtype=float)
         while True:
             piece = min(self.spacing, length - travelled)
             m = self._slide(pos, direction, piece, f.sensor)
             travelled += m.distance
+            if (
+                self.params.comply
+                and travelled + RIDE_STEP * self.rho < length
+                and (m.event == "blocked" or (m.event == "release" and f.sensor not in m.fired))
+            ):
+                ahead = _chord(start, np.asarray(m.end, dtype=float), self.rho, m.direction)
+                ridden = self._ride(m, f, ahead)
+                if ridden is not None:
+                    pos, hop = ridden
+                    travelled += hop
+                    self.rides += 1
+                    continue
             if m.event != "none" or m.distance < piece - 1e-9 or travelled >= length - 1e-9:
                 return m, travelled
             self._record(m, f, "slide")
             pos = np.asarray(m.end, dtype=float)
+
+    def _ride(self, m: Motion, f: _Follow, ahead: FArray) -> tuple[FArray, float] | None:
+        """Ride over an irregularity that stopped the slide ``m`` of ``f``'s surface.
+
+        The compliance of a finger under force control, made of the servo logic's own
+        motions: back off the surface by :attr:`bump`, step on by :data:`RIDE_STEP` ρ along
+        ``ahead`` (the slide's mean direction so far), and press back towards the surface
+        (along r0, squared to ``ahead``) to :attr:`bump` deeper than where the slide ran. A bump
+        higher than that is tried once more, lifting twice as far. The surface is regained when the followed sensor fires again: that
+        contact is recorded as a ``"slide"`` contact (the finger never left the surface it
+        follows) and the slide goes on from there.
+
+        The step is long enough that at a real convex edge the press misses the edge or meets
+        the next face with sensors turned further than :data:`RIDE_DEG`, so a real edge still ends the slide as the paper's rules say: the finger goes
+        back to where the slide stopped and None is returned (the caller then runs the search
+        cycle, or ends the contour).
+        """
+        r0 = _unit(f.r0)
+        horizontal = float(np.hypot(r0[0], r0[1]))
+        if horizontal > 1e-6:  # press square to the slide's mean direction, at r0's elevation
+            r0 = _unit(np.cross(_Z, ahead) * horizontal + np.array([0.0, 0.0, r0[2]]))
+        regained: Motion | None = None
+        for lift in (self.bump, 2.0 * self.bump):  # a bump higher than expected: lift more
+            pos = np.asarray(m.end, dtype=float)
+            legs: list[tuple[FArray, float]] = []
+            back = self._move_on(pos, -r0, lift)
+            legs.append((r0, back.distance))
+            pos = np.asarray(back.end, dtype=float)
+            if back.event in ("none", "release"):
+                step = self._move(pos, ahead, RIDE_STEP * self.rho)
+                legs.append((-ahead, step.distance))
+                pos = np.asarray(step.end, dtype=float)
+                if step.event == "touch" and step.distance > 0.25 * self.rho:
+                    regained = step
+                elif step.event == "none":
+                    press = self._move(pos, r0, lift + self.bump)
+                    legs.append((-r0, press.distance))
+                    if press.event == "touch":
+                        regained = press
+                    pos = np.asarray(press.end, dtype=float)
+            if regained is not None and not self._same_surface(regained, f, r0):
+                regained = None
+            if regained is not None:
+                break
+            # not regained: back to where the slide stopped, for the paper's rules from there
+            for direction, length in reversed(legs):
+                if length > 1e-12:
+                    pos = np.asarray(self._move(pos, direction, length).end, dtype=float)
+            if m.event == "release":  # the surface fell away: a real edge
+                return None
+        if regained is None:
+            return None
+        if f.sensor not in regained.fired:  # the surface turned a little: follow what closed
+            nf = self._follow(regained.closed)
+            f.sensor, f.group, f.r0 = nf.sensor, nf.group, nf.r0
+        self._record(regained, f, "slide")
+        end = np.asarray(regained.end, dtype=float)
+        return end, max(0.0, float((end - np.asarray(m.end, dtype=float)) @ ahead))
+
+    def _same_surface(self, m: Motion, f: _Follow, press: FArray) -> bool:
+        """Whether a touch while riding is the followed surface again: the followed sensor
+        fired, or the sensors that closed point within :data:`RIDE_DEG` of the press."""
+        if f.sensor in m.fired:
+            return True
+        if not m.closed:
+            return False
+        mean = _unit(self._dirs[list(m.closed)].sum(axis=0))
+        return float(mean @ press) >= math.cos(math.radians(RIDE_DEG))
 
     def _contour(
         self, pos: FArray, f: _Follow, *, last: bool = False
@@ -548,7 +657,7 @@ class Controller:
                 if segs and segs[-1].group == frozenset(f.group) and since > travelled:
                     segs[-1].length += travelled  # the same surface, after another sensor opened
                 else:
-                    direction = np.asarray(m.direction, dtype=float)
+                    direction = _chord(start, pos, self.rho, m.direction)
                     segs.append(
                         _Segment(frozenset(f.group), start, direction, travelled, f.r0.copy())
                     )
@@ -969,6 +1078,15 @@ def _exit(point: FArray, direction: FArray, lo: FArray, hi: FArray) -> float:
         elif direction[k] < -1e-12:
             t = min(t, (lo[k] - point[k]) / direction[k])
     return max(t, 0.0) if math.isfinite(t) else 0.0
+
+
+def _chord(start: FArray, end: FArray, least: float, fallback: Vec3) -> FArray:
+    """The horizontal unit direction from ``start`` to ``end`` when they lie at least ``least``
+    apart (a slide's mean direction over an irregular surface), else ``fallback``."""
+    chord = np.array([end[0] - start[0], end[1] - start[1], 0.0])
+    if float(np.linalg.norm(chord)) >= least:
+        return _unit(chord)
+    return np.asarray(fallback, dtype=float)
 
 
 def _radius(contacts: Sequence[Contact]) -> float:
