@@ -40,7 +40,7 @@ from typing import TYPE_CHECKING, Any, Literal, Protocol, runtime_checkable
 
 from tactile_kb.errors import PluginError, UsageError
 from tactile_kb.finger import Finger, load_finger
-from tactile_kb.objects import ObjectLike, check_thickness, load_object, object_name
+from tactile_kb.objects import NOTES_KEY, ObjectLike, check_thickness, load_object, object_name
 from tactile_kb.plugins import Registry
 from tactile_kb.record import ExplorationRecord
 
@@ -203,6 +203,7 @@ class WorldExplorer(abc.ABC):
             seed=seed,
             extra_params={"noise": float(noise)},
         )
+        controller.notes.extend(str(n) for n in mesh.metadata.get(NOTES_KEY, []))
         return ServoSession(controller)
 
     def explore(
