@@ -110,6 +110,14 @@ class ExplorationRecord(BaseModel):
     contacts_per_phase: dict[str, int] = Field(default_factory=dict)
     complete: bool = Field(default=True, description="False when lazy exploration stopped early")
     notes: list[str] = Field(default_factory=list)
+    ending: str = Field(
+        default="",
+        description="how the model-driven completion ended: 'closed' (a closed model, every "
+        "face touched at two heights), 'budget' or 'unreachable'; '' when none ran",
+    )
+    unreachable: list[str] = Field(
+        default_factory=list, description="what stayed open when the completion ended"
+    )
 
     @property
     def touches(self) -> int:

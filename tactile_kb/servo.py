@@ -55,7 +55,7 @@ import itertools
 import math
 from collections.abc import Iterator, Sequence
 from dataclasses import asdict, dataclass, field, replace
-from typing import Literal
+from typing import Literal, Protocol
 
 import numpy as np
 from numpy.typing import NDArray
@@ -64,7 +64,7 @@ from tactile_kb.errors import ExplorationError, UsageError
 from tactile_kb.record import Contact, ExplorationRecord, Layer
 from tactile_kb.world import Motion, Vec3, World
 
-__all__ = ["Controller", "Mark", "ServoParams"]
+__all__ = ["Completer", "Controller", "Ending", "Mark", "Probe", "ServoParams"]
 
 Mark = Literal["contact", "layer", "complete"]
 """What :meth:`Controller.run` yields: the first touch, a finished layer, the end."""
@@ -156,8 +156,8 @@ class ServoParams:
     approach_margin: float = 0.01
     comply: bool = True
     bump: float | None = None
-    max_motions: int = 3000
-    max_layer_motions: int = 400
+    max_motions: int = 6000
+    max_layer_motions: int = 1000
     max_layers: int = 40
 
     def __post_init__(self) -> None:
@@ -180,6 +180,54 @@ class ServoParams:
 
 class _Budget(Exception):
     pass
+
+
+@dataclass(frozen=True)
+class Probe:
+    """A touch asked for from above the controller (plain values, no geometry in the servo).
+
+    The finger goes round the object (up over the hint box, across, down) to a point
+    ``target + normal × (reach + clearance)`` outside it and approaches along ``−normal``
+    until a sensor closes, then slides a little along the surface it touched.
+
+    Attributes
+    ----------
+    target
+        Where the surface is expected (metres; the tip centre's goal, offset by ρ already).
+    normal
+        Unit outward direction to approach from.
+    reach
+        How far beyond ``target`` the approach may go looking for the surface (metres).
+    reason
+        What the probe is for, e.g. ``"open towards +y"`` (for the record's notes).
+    """
+
+    target: Vec3
+    normal: Vec3
+    reach: float
+    reason: str
+
+
+@dataclass(frozen=True)
+class Ending:
+    """How a model-driven completion ended: ``"closed"`` (the envelope is closed and every face
+    has tip centres at two heights), ``"budget"`` (touches or path ran out) or ``"unreachable"``
+    (what stayed open cannot be reached); ``message`` says it in one line, ``unreachable``
+    names what stayed open."""
+
+    status: Literal["closed", "budget", "unreachable"]
+    message: str
+    unreachable: tuple[str, ...] = ()
+
+
+class Completer(Protocol):
+    """What drives the completion after contour following (see :mod:`tactile_kb.completion`):
+    given the record so far and the outcome of the previous probe (None at the start), the next
+    :class:`Probe`, or the :class:`Ending`."""
+
+    def next_probe(
+        self, record: ExplorationRecord, last: tuple[Probe, bool] | None
+    ) -> Probe | Ending: ...
 
 
 @dataclass
@@ -211,6 +259,10 @@ class Controller:
         The servo parameters.
     explorer, object_name, seed, extra_params
         Copied into the record.
+    completer
+        Drives the completion after the layers, the probes and the tops: probes asked for by
+        a model of what was touched (:mod:`tactile_kb.completion`) until it says the model is
+        closed or the budget is spent. None: no completion (the paper's exploration alone).
     """
 
     def __init__(
@@ -222,8 +274,11 @@ class Controller:
         object_name: str = "",
         seed: int | None = None,
         extra_params: dict[str, float] | None = None,
+        completer: Completer | None = None,
     ) -> None:
         self.world = world
+        self.completer = completer
+        self.ending: Ending | None = None
         self.params = params or ServoParams()
         self.explorer = explorer
         self.object_name = object_name
@@ -254,6 +309,7 @@ class Controller:
         self._phase = "first-contact"
         self._layer: int | None = None
         self._last_pos: Vec3 | None = None
+        self._last_move: Motion | None = None
         self._surfaces: list[tuple[float, _Segment]] = []  # (layer z, surface slid along)
         self._heights: list[float] = []  # the z of every layer
 
@@ -271,6 +327,7 @@ class Controller:
             self.path.append(m.start)
         self.path.append(m.measured)
         self._last_pos = m.end
+        self._last_move = m
         if self.motions >= self.params.max_motions:
             raise _Budget(f"motion budget of {self.params.max_motions} exhausted")
         return m
@@ -387,6 +444,8 @@ class Controller:
                 else []
             )
             + ([f"{self.rides} surface irregularities ridden over"] if self.rides else []),
+            ending=self.ending.status if self.ending else "",
+            unreachable=list(self.ending.unreachable) if self.ending else [],
         )
 
     # the exploration ---------------------------------------------------------------------------
@@ -451,7 +510,115 @@ class Controller:
                 self._top(top_contacts)
         except _Budget as exc:
             self._note(str(exc))
+        if self.completer is not None:
+            self._phase = "complete"
+            self._complete(self.completer)
         yield "complete"
+
+    # completion driven from above ---------------------------------------------------------------
+    def _complete(self, completer: Completer) -> None:
+        """Carry out the probes ``completer`` asks for until it returns an :class:`Ending`."""
+        last: tuple[Probe, bool] | None = None
+        while True:
+            try:
+                nxt = completer.next_probe(self.record(complete=False), last)
+                if isinstance(nxt, Ending):
+                    self.ending = nxt
+                    self._note(nxt.message)
+                    return
+                last = (nxt, self.probe(nxt))
+            except _Budget as exc:
+                text = f"{exc} during the completion ({self.touches} touches)"
+                self.ending = Ending("budget", text, ())
+                self._note(text)
+                return
+
+    @property
+    def touches(self) -> int:
+        """Touches so far (sensor OFF→ON events kept in the record)."""
+        return sum(1 for c in self.contacts if c.kind == "touch")
+
+    def probe(self, p: Probe) -> bool:
+        """Touch the surface asked for by ``p``; whether a sensor facing it closed.
+
+        The way there goes up over the hint box, across to above the start of the approach,
+        and down to it (each leg in free space: anything met on the way ends the probe). The
+        touch is followed by a short slide each way along the surface (more tip centres on it).
+        """
+        normal = _unit(np.asarray(p.normal, dtype=float))
+        target = np.asarray(p.target, dtype=float)
+        hint = self.world.hint
+        lo, hi = np.asarray(hint.lo, dtype=float), np.asarray(hint.hi, dtype=float)
+        clear = self.rho + self.params.approach_margin
+        out = float(p.reach)
+        if float(np.hypot(normal[0], normal[1])) > 1e-6:
+            flat = _unit(np.array([normal[0], normal[1], 0.0]))
+            out = max(out, _exit(target, flat, lo, hi) / max(float(flat @ normal), 0.2))
+        if normal[2] > 1e-6:
+            out = max(out, (float(hi[2]) - float(target[2])) / float(normal[2]))
+        far = target + normal * (out + clear)
+        far[2] = max(float(far[2]), float(self.world.workspace.lo[2]))
+        if not self.world.workspace.contains(_v3(far)):
+            self._note(f"a probe ({p.reason}) would start outside the workspace at {_fmt(_v3(far))}")
+            return False
+        if not self._go_round(far, p.reason):
+            return False
+        here = np.asarray(self._last_pos, dtype=float)
+        m = self._move(here, -normal, float(np.linalg.norm(far - target)) + p.reach + clear)
+        if m.event != "touch":
+            self._note(f"a probe ({p.reason}) found nothing ({m.event})")
+            return False
+        f = self._follow(m.closed)
+        self._record(m, f, "touch")
+        if float(f.r0 @ -normal) < math.cos(math.radians(60.0)):
+            return False  # touched, but not a surface facing the approach
+        pos = np.asarray(m.end, dtype=float)
+        t = self._tangent(f)
+        if t is None:  # a top: slide along any horizontal direction
+            t = _unit(np.cross(normal, np.array([1.0, 0.0, 0.0])))
+            if float(np.linalg.norm(t)) < 0.5:
+                t = np.array([0.0, 1.0, 0.0])
+            t = _unit(np.array([t[0], t[1], 0.0]))
+        for direction in (t, -t):
+            sm, travelled = self._slide_sampled(pos, direction, f, 2.0 * self.spacing)
+            if travelled > 1e-6 and sm.event in ("none", "release", "blocked"):
+                self._record(sm, f, "slide")
+            pos = np.asarray(sm.end, dtype=float)
+            if sm.event not in ("none", "release", "blocked") or f.sensor not in sm.fired:
+                break
+        return True
+
+    def _go_round(self, goal: FArray, why: str) -> bool:
+        """Move from where the finger is to ``goal`` over the top of the hint box."""
+        hint = self.world.hint
+        safe = float(hint.hi[2]) + self.rho + self.params.approach_margin
+        here = np.asarray(self._last_pos, dtype=float)
+        if self._last_move is not None and self._last_move.event in ("touch", "blocked"):
+            # leave the surface first: back the way the last motion came
+            back = -np.asarray(self._last_move.direction, dtype=float)
+            m = self._move_on(here, back, self.rho)
+            here = np.asarray(m.end, dtype=float)
+        if self.world.sense(_v3(here)):  # still on a surface: away from the middle
+            centre = np.asarray(hint.centre, dtype=float)
+            away = _unit(np.array([here[0] - centre[0], here[1] - centre[1], 0.0]))
+            if float(np.linalg.norm(away)) > 0.5:
+                m = self._move_on(here, away, self.rho)
+                here = np.asarray(m.end, dtype=float)
+        for waypoint in (
+            np.array([here[0], here[1], max(safe, float(here[2]))]),
+            np.array([goal[0], goal[1], max(safe, float(goal[2]))]),
+            goal,
+        ):
+            d = waypoint - here
+            length = float(np.linalg.norm(d))
+            if length < 1e-9:
+                continue
+            m = self._move_on(here, d / length, length)
+            here = np.asarray(m.end, dtype=float)
+            if m.event not in ("none", "release"):
+                self._note(f"the way to a probe ({why}) is blocked at {_fmt(m.end)} ({m.event})")
+                return False
+        return True
 
     def _first_contact(self) -> tuple[FArray, _Follow]:
         """Approach the object horizontally (+x) on lines across the hint until a sensor closes."""

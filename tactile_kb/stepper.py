@@ -571,14 +571,21 @@ class StepperExplorer(WorldExplorer):
         Servo parameters (:class:`tactile_kb.servo.ServoParams`); defaults suit 2–30 cm objects.
     dropout, false_fire
         Sensor fault probabilities passed to the world (see :class:`StepperWorld`).
+    completion
+        Budget of the model-driven completion (:class:`tactile_kb.completion.CompletionParams`).
     """
 
     name = "stepper"
 
     def __init__(
-        self, params: Any = None, *, dropout: float = 0.0, false_fire: float = 0.0
+        self,
+        params: Any = None,
+        *,
+        dropout: float = 0.0,
+        false_fire: float = 0.0,
+        completion: Any = None,
     ) -> None:
-        super().__init__(params)
+        super().__init__(params, completion=completion)
         self.dropout = dropout
         self.false_fire = false_fire
 
