@@ -149,9 +149,10 @@ def completion_probes(model: ObjectModel, *, height_gap: float | None = None) ->
         z0, z1 = float(ring[:, 2].min()), float(ring[:, 2].max())
         if z1 - z0 < 2.0 * rho:
             continue  # lower than the tip is wide: one height is all it can give
-        margin = min(0.5 * rho, 0.25 * (z1 - z0))
-        # the surface heights the tip can touch on this face (its centre stays above ρ)
-        lo_z = max(z0 + margin, rho - rho * n[2] + 0.0005)
+        margin = min(rho, 0.25 * (z1 - z0))
+        # the surface heights the tip can touch on this face, clear of its edges (the tip
+        # centre stays 1.5 ρ above the table: scanned bottom edges bulge)
+        lo_z = max(z0 + margin, 1.5 * rho - rho * n[2])
         hi_z = z1 - margin
         if hi_z <= lo_z:
             continue

@@ -132,6 +132,19 @@ class ExplorationRecord(BaseModel):
         p = np.asarray(self.path, dtype=float)
         return float(np.linalg.norm(np.diff(p, axis=0), axis=1).sum())
 
+    @property
+    def open_ending(self) -> str:
+        """Why the exploration ended without a closed model, in one line; "" when it closed
+        (or when no completion ran, as in records of version 0.1)."""
+        if self.ending in ("", "closed"):
+            return ""
+        what = {
+            "budget": "the completion budget ran out",
+            "unreachable": "what stayed open could not be reached",
+        }.get(self.ending, f"the exploration ended ({self.ending})")
+        still = "; ".join(self.unreachable) or "unknown"
+        return f"{what} after {self.touches} touches; still open: {still}"
+
     def to_json(self, *, indent: int | None = None) -> str:
         """The record as JSON text."""
         return self.model_dump_json(indent=indent)

@@ -550,21 +550,27 @@ class Controller:
         hint = self.world.hint
         lo, hi = np.asarray(hint.lo, dtype=float), np.asarray(hint.hi, dtype=float)
         clear = self.rho + self.params.approach_margin
-        out = float(p.reach)
-        if float(np.hypot(normal[0], normal[1])) > 1e-6:
-            flat = _unit(np.array([normal[0], normal[1], 0.0]))
-            out = max(out, _exit(target, flat, lo, hi) / max(float(flat @ normal), 0.2))
-        if normal[2] > 1e-6:
-            out = max(out, (float(hi[2]) - float(target[2])) / float(normal[2]))
+        # along the normal out of the hint box: the approach starts outside the object
+        out = min(
+            (float(hi[k]) - float(target[k])) / normal[k]
+            if normal[k] > 1e-9
+            else (float(lo[k]) - float(target[k])) / normal[k]
+            if normal[k] < -1e-9
+            else math.inf
+            for k in range(3)
+        )
+        out = max(out, 0.0) if math.isfinite(out) else 0.0
         far = target + normal * (out + clear)
         far[2] = max(float(far[2]), float(self.world.workspace.lo[2]))
         if not self.world.workspace.contains(_v3(far)):
-            self._note(f"a probe ({p.reason}) would start outside the workspace at {_fmt(_v3(far))}")
+            self._note(
+                f"a probe ({p.reason}) would start outside the workspace at {_fmt(_v3(far))}"
+            )
             return False
         if not self._go_round(far, p.reason):
             return False
         here = np.asarray(self._last_pos, dtype=float)
-        m = self._move(here, -normal, float(np.linalg.norm(far - target)) + p.reach + clear)
+        m = self._move(here, -normal, float(np.linalg.norm(far - target)) + p.reach)
         if m.event != "touch":
             self._note(f"a probe ({p.reason}) found nothing ({m.event})")
             return False
@@ -593,11 +599,19 @@ class Controller:
         hint = self.world.hint
         safe = float(hint.hi[2]) + self.rho + self.params.approach_margin
         here = np.asarray(self._last_pos, dtype=float)
-        if self._last_move is not None and self._last_move.event in ("touch", "blocked"):
-            # leave the surface first: back the way the last motion came
-            back = -np.asarray(self._last_move.direction, dtype=float)
-            m = self._move_on(here, back, self.rho)
-            here = np.asarray(m.end, dtype=float)
+        last = self._last_move
+        if last is not None and (last.event in ("touch", "blocked") or last.fired):
+            # leave the surface first: away from the last contact (or back the way the last
+            # motion came, when no sensor felt it)
+            back = -np.asarray(last.direction, dtype=float)
+            if last.fired and self.contacts:
+                back = -np.asarray(self.contacts[-1].direction, dtype=float)
+            for _ in range(2):  # a bulge in the way: once more
+                m = self._move_on(here, back, self.rho)
+                here = np.asarray(m.end, dtype=float)
+                if m.event in ("none", "release"):
+                    break
+                back = _unit(back + _Z)
         if self.world.sense(_v3(here)):  # still on a surface: away from the middle
             centre = np.asarray(hint.centre, dtype=float)
             away = _unit(np.array([here[0] - centre[0], here[1] - centre[1], 0.0]))
