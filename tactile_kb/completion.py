@@ -88,7 +88,7 @@ DEFAULT_COMPLETION = CompletionParams()
 
 
 def _name(v: FloatArray) -> str:
-    return "(" + ", ".join(f"{x:+.1f}" for x in v) + ")"
+    return "(" + ", ".join(f"{round(float(x), 1) + 0.0:+.1f}" for x in v) + ")"
 
 
 def completion_probes(model: ObjectModel, *, height_gap: float | None = None) -> list[Probe]:
@@ -132,7 +132,8 @@ def completion_probes(model: ObjectModel, *, height_gap: float | None = None) ->
             else:
                 target = np.array([mid[0], mid[1], z_mid])
                 probes.append(Probe(_v(target), _v(d), reach, f"open towards {_name(d)}"))
-        return probes
+        unique = {p.reason: p for p in reversed(probes)}  # the first of each direction
+        return [p for p in probes if unique[p.reason] is p]
     poly = model.polyhedron
     for k, verts in enumerate(poly.faces):
         index = model.face_of[k] if k < len(model.face_of) else -1
@@ -185,6 +186,20 @@ def _section_point(ring: FloatArray, z: float) -> FloatArray | None:
         return None
     point: FloatArray = np.mean(pts, axis=0)
     return point
+
+
+def _over_the_rim(record: ExplorationRecord, probe: Probe) -> Probe:
+    """The probe from above moved over the highest touched point, 1.5 ρ inwards: when the
+    middle of the object is a cavity (a mug), its top is a rim next to the highest contact."""
+    centres = np.asarray([c.centre for c in record.contacts], dtype=float)
+    top = centres[int(np.argmax(centres[:, 2]))]
+    mid = np.asarray(probe.target, dtype=float)
+    inwards = np.array([mid[0] - top[0], mid[1] - top[1], 0.0])
+    length = float(np.linalg.norm(inwards))
+    if length < 1e-9:
+        return probe
+    point = top + inwards / length * min(length, 1.5 * record.tip_radius)
+    return Probe(_v(point), probe.normal, probe.reach, probe.reason)
 
 
 def _v(a: FloatArray) -> tuple[float, float, float]:
@@ -248,4 +263,7 @@ class ModelCompleter:
                 tuple(open_items),
             )
         self.probes += 1
-        return todo[0]
+        probe = todo[0]
+        if probe.reason == "open towards +z" and self._failed[probe.reason]:
+            probe = _over_the_rim(record, probe)
+        return probe

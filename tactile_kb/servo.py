@@ -600,12 +600,18 @@ class Controller:
         safe = float(hint.hi[2]) + self.rho + self.params.approach_margin
         here = np.asarray(self._last_pos, dtype=float)
         last = self._last_move
-        if last is not None and (last.event in ("touch", "blocked") or last.fired):
+        near = (
+            bool(self.contacts)
+            and float(np.linalg.norm(np.asarray(self.contacts[-1].centre) - here)) < 3.0 * self.rho
+        )
+        if near or (last is not None and last.event == "blocked"):
             # leave the surface first: away from the last contact (or back the way the last
             # motion came, when no sensor felt it)
-            back = -np.asarray(last.direction, dtype=float)
-            if last.fired and self.contacts:
-                back = -np.asarray(self.contacts[-1].direction, dtype=float)
+            back = (
+                -np.asarray(self.contacts[-1].direction, dtype=float)
+                if near
+                else -np.asarray(last.direction if last else (0.0, 0.0, -1.0), dtype=float)
+            )
             for _ in range(2):  # a bulge in the way: once more
                 m = self._move_on(here, back, self.rho)
                 here = np.asarray(m.end, dtype=float)
