@@ -144,7 +144,9 @@ def test_records_without_an_ending_still_load(tmp_path: Path) -> None:
     data = json.loads(rec.to_json())
     del data["ending"], data["unreachable"]
     old = ExplorationRecord.from_json(json.dumps(data))
-    assert old.ending == "" and old.unreachable == [] and old.open_ending == ""
+    assert old.ending == ""
+    assert old.unreachable == []
+    assert old.open_ending == ""
 
 
 def test_completion_probes_point_at_the_missing_side() -> None:
