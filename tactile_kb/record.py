@@ -86,7 +86,9 @@ class Layer(BaseModel):
     z: float
     path: list[Vec3] = Field(default_factory=list, description="tip-centre path in this layer")
     contour: list[Vec2] = Field(
-        default_factory=list, description="the object's cross-section polygon, counter-clockwise"
+        default_factory=list,
+        description="the object's cross-section polygon, counter-clockwise (filled by records "
+        "of 0.1 only; the model traces contours from the contacts)",
     )
     closed: bool = Field(default=False, description="the contour returned to its first contact")
 

@@ -472,7 +472,7 @@ class Controller:
                 last = above or index + 1 >= self.params.max_layers
                 closed, pos, follow = self._contour(pos, follow, last=last)
                 layer_path = self.path[start_path - 1 if start_path else 0 :]
-                self._finish_layer(index, z, layer_path, start_contacts, closed)
+                self._finish_layer(index, z, layer_path, closed)
                 layer_contacts = [c for c in self.contacts[start_contacts:] if c.layer == index]
                 self._heights.append(z)
                 if index and self._narrow(layer_contacts, top_contacts):
@@ -483,7 +483,6 @@ class Controller:
                     )
                     self.contacts = [c for c in self.contacts if c.layer != index]
                     self._surfaces = [(h, g) for h, g in self._surfaces if abs(h - z) > 1e-12]
-                    self.layers[-1] = self.layers[-1].model_copy(update={"contour": []})
                     yield "layer"
                     break
                 if closed or not top_contacts:
@@ -504,10 +503,10 @@ class Controller:
             self._layer = None
             if self.params.probe:
                 self._phase = "probe"
-                self._probe(_centre(top_contacts))
+                _SideProbes(self).run(_centre(top_contacts))
             if self.params.top:
                 self._phase = "top"
-                self._top(top_contacts)
+                _TopPhase(self).run(top_contacts)
         except _Budget as exc:
             self._note(str(exc))
         if self.completer is not None:
@@ -1054,13 +1053,26 @@ class Controller:
         size, size_below = _radius(contacts), _radius(below)
         return size - self.rho < 2.0 * self.rho and size < 0.6 * size_below
 
-    def _probe(self, centre: FArray | None) -> None:
+    def _finish_layer(self, index: int, z: float, path: list[Vec3], closed: bool) -> None:
+        # the controller computes no geometry: the model traces contours from the contacts
+        self.layers.append(Layer(index=index, z=float(z), path=list(path), closed=closed))
+
+class _SideProbes:
+    """The probe phase: every surface that only one layer slid along (narrow there, or skipped
+    by a search cycle) is touched once more at another height, approached along its normal
+    from outside the object, so that every face has tip centres at two heights."""
+
+    def __init__(self, controller: Controller) -> None:
+        self._c = controller
+
+    def run(self, centre: FArray | None) -> None:
         """Touch every surface slid along in one layer only once more, at another height."""
-        heights = sorted(set(self._heights))
+        c = self._c
+        heights = sorted(set(c._heights))
         if len(heights) < 2 or centre is None:
             return
         seen: dict[frozenset[int], list[tuple[float, _Segment]]] = {}
-        for z, seg in self._surfaces:
+        for z, seg in c._surfaces:
             seen.setdefault(seg.group, []).append((z, seg))
         for found in seen.values():
             zs = {z for z, _ in found}
@@ -1081,10 +1093,10 @@ class Controller:
             aim = seg.start + (0.7 * along.min() + 0.3 * along.max()) * seg.direction
             z1 = min((z for z in heights if z != z0), key=lambda z: abs(z - z0))
             z = z0 + 0.6 * (z1 - z0)
-            if not self._probe_one(aim, _unit(out), z, centre, seg.group):
+            if not self._one(aim, _unit(out), z, centre, seg.group):
                 return
 
-    def _probe_one(
+    def _one(
         self, aim: FArray, out: FArray, z: float, centre: FArray, group: frozenset[int]
     ) -> bool:
         """Approach a surface at height ``z`` along its outward normal ``out``, from outside the
@@ -1094,11 +1106,12 @@ class Controller:
         The touch is kept when it fired the surface's own sensors (``group``), even if the
         surface is too narrow there to slide far; otherwise it must slide like a surface.
         """
-        hint = self.world.hint
+        c = self._c
+        hint = c.world.hint
         lo, hi = np.asarray(hint.lo, dtype=float), np.asarray(hint.hi, dtype=float)
-        clear = self.rho + self.params.approach_margin
+        clear = c.rho + c.params.approach_margin
         # the way out: away from the middle of the object, then up over it, then down outside it
-        here = np.asarray(self._last_pos, dtype=float)
+        here = np.asarray(c._last_pos, dtype=float)
         away = _unit(np.array([here[0] - centre[0], here[1] - centre[1], 0.0]))
         target = np.array([aim[0], aim[1], z])
         far = target + out * (_exit(target, out, lo, hi) + clear)
@@ -1107,10 +1120,10 @@ class Controller:
         if float(np.linalg.norm(away)) > 0.5:
             legs.append((away, _exit(here, away, lo, hi) + clear))
         for leg_dir, length in legs:
-            m = self._move(here, leg_dir, length)
+            m = c._move(here, leg_dir, length)
             here = np.asarray(m.end, dtype=float)
             if m.event in ("touch", "blocked"):
-                self._note(f"the way to a probe is blocked at {_fmt(m.end)}")
+                c._note(f"the way to a probe is blocked at {_fmt(m.end)}")
                 return False
         for goal in (
             np.array([here[0], here[1], safe]),
@@ -1121,76 +1134,67 @@ class Controller:
             length = float(np.linalg.norm(d))
             if length < 1e-9:
                 continue
-            m = self._move_on(here, d / length, length)
+            m = c._move_on(here, d / length, length)
             here = np.asarray(m.end, dtype=float)
             if m.event not in ("none", "release"):
-                self._note(f"the way to a probe is blocked at {_fmt(m.end)} ({m.event})")
+                c._note(f"the way to a probe is blocked at {_fmt(m.end)} ({m.event})")
                 return False
-        m = self._move(here, -out, float(np.linalg.norm(far - target)) + self.params.l2)
+        m = c._move(here, -out, float(np.linalg.norm(far - target)) + c.params.l2)
         if m.event != "touch":
-            self._note(f"a probe at z = {z:.4f} m found nothing ({m.event})")
+            c._note(f"a probe at z = {z:.4f} m found nothing ({m.event})")
             return True
-        f = self._follow(m.closed)
-        first = len(self.contacts)
-        self._record(m, f, "touch")
-        t = self._tangent(f)
+        f = c._follow(m.closed)
+        first = len(c.contacts)
+        c._record(m, f, "touch")
+        t = c._tangent(f)
         if t is None:
             return True
-        sm, travelled = self._slide_sampled(np.asarray(m.end, dtype=float), t, f, self.reach)
+        sm, travelled = c._slide_sampled(np.asarray(m.end, dtype=float), t, f, c.reach)
         same = frozenset(m.closed) == group
-        if not same and travelled < self.edge_slide and self._rolled(sm, f):
-            del self.contacts[first:]  # an edge, not the surface
+        if not same and travelled < c.edge_slide and c._rolled(sm, f):
+            del c.contacts[first:]  # an edge, not the surface
             return True
         if travelled > 1e-6:
-            self._record(sm, f, "slide")
+            c._record(sm, f, "slide")
         return True
 
-    def _finish_layer(
-        self, index: int, z: float, path: list[Vec3], first: int, closed: bool
-    ) -> None:
-        contacts = [c for c in self.contacts[max(first, 0) :] if c.layer == index]
-        contour: list[tuple[float, float]] = []
-        try:
-            from tactile_kb.sections import contour_from_contacts
-        except ImportError:  # pragma: no cover - the geometry module is part of the package
-            contour_from_contacts = None  # type: ignore[assignment]
-        if contour_from_contacts is not None:
-            try:
-                contour = contour_from_contacts(contacts, self.rho, closed=closed)
-            except (UsageError, np.linalg.LinAlgError, ValueError):
-                contour = []
-        self.layers.append(
-            Layer(index=index, z=float(z), path=list(path), contour=contour, closed=closed)
-        )
 
-    def _top(self, contacts: list[Contact]) -> None:
+class _TopPhase:
+    """The top phase: tops, which contouring in horizontal planes cannot touch, are explored
+    from above over the middle of the last contour."""
+
+    def __init__(self, controller: Controller) -> None:
+        self._c = controller
+
+    def run(self, contacts: list[Contact]) -> None:
         """Approach from above over the middle of the last contour; slide round a diamond on it.
 
         The diamond's corners lie on the contour's principal axes at ``top_spread`` × its
         half-widths, so that the tip centres on the top span it. A touch that cannot slide
         (an apex or an edge) is noted and not recorded as a plane.
         """
-        if self.finger.nearest((0.0, 0.0, -1.0)) is None:
-            self._note("no sensor points down: tops are not explored")
+        c = self._c
+        if c.finger.nearest((0.0, 0.0, -1.0)) is None:
+            c._note("no sensor points down: tops are not explored")
             return
         if len(contacts) < 2:
             return
         xy = np.asarray([c.centre[:2] for c in contacts], dtype=float)
         mid = xy.mean(axis=0)
         _, _, vt = np.linalg.svd(xy - mid, full_matrices=False)
-        half = np.abs((xy - mid) @ vt.T).max(axis=0) - self.rho
-        reach = np.maximum(self.params.top_spread * half, 0.001)
-        top = float(self.world.hint.hi[2]) + self.rho + self.params.approach_margin
+        half = np.abs((xy - mid) @ vt.T).max(axis=0) - c.rho
+        reach = np.maximum(c.params.top_spread * half, 0.001)
+        top = float(c.world.hint.hi[2]) + c.rho + c.params.approach_margin
         start = (float(mid[0]), float(mid[1]), top)
-        if not self.world.workspace.contains(start):
+        if not c.world.workspace.contains(start):
             return
-        m = self._move(start, -_Z, top - self.rho)
+        m = c._move(start, -_Z, top - c.rho)
         if m.event != "touch":
-            self._note(f"the approach from above at {_fmt(start)} found nothing ({m.event})")
+            c._note(f"the approach from above at {_fmt(start)} found nothing ({m.event})")
             return
-        f = self._follow(m.closed)
-        first = len(self.contacts)
-        self._record(m, f, "touch")
+        f = c._follow(m.closed)
+        first = len(c.contacts)
+        c._record(m, f, "touch")
         pos = np.asarray(m.end, dtype=float)
         a1 = np.array([vt[0, 0], vt[0, 1], 0.0])
         a2 = np.array([vt[1, 0], vt[1, 1], 0.0])
@@ -1203,16 +1207,17 @@ class Controller:
             (_unit(b - a), float(np.linalg.norm(b - a))) for a, b in itertools.pairwise(corners)
         ]
         for direction, length in legs:
-            sm, travelled = self._slide_sampled(pos, direction, f, length)
+            sm, travelled = c._slide_sampled(pos, direction, f, length)
             moved += travelled
             pos = np.asarray(sm.end, dtype=float)
             if travelled > 1e-6:
-                self._record(sm, f, "slide")
+                c._record(sm, f, "slide")
             if sm.event != "none":
                 break
-        if moved < self.edge_slide:
-            del self.contacts[first:]
-            self._note(f"the touch from above at {_fmt(m.end)} is an apex or an edge: not a plane")
+        if moved < c.edge_slide:
+            del c.contacts[first:]
+            c._note(f"the touch from above at {_fmt(m.end)} is an apex or an edge: not a plane")
+
 
 
 @dataclass

@@ -68,6 +68,7 @@ BLOCK_TOL = 1e-9
 _NUDGE = 1e-8  # how far past a change the motion stops, so the new state holds at the end
 _EPS_T = 1e-12
 _BATCH = 48  # sensor states evaluated together along a motion
+_DENSE_STRIDE = 8  # on a dense mesh, sensor states are first sampled every 8th gap
 
 DENSE_FACES = 4000
 """Meshes with more triangles than this are searched through k-d trees: a motion meets only the
@@ -234,9 +235,9 @@ class StepperWorld:
         direction by up to 0.25° and make a sensor at the edge of its cone flicker.
         """
         r = self._rho + CONTACT_TOL
-        found = self._tree.query_ball_point(pts, r + self._tr_max + 1e-9)
+        found = self._tree.query_ball_point(pts, r + self._tr_max + 1e-9, return_sorted=False)
         pi = np.repeat(np.arange(len(pts)), [len(f) for f in found])
-        ti = np.fromiter((t for f in found for t in f), dtype=np.intp, count=len(pi))
+        ti = np.fromiter(itertools.chain.from_iterable(found), dtype=np.intp, count=len(pi))
         if len(pi):  # bounding spheres: a triangle further than its radius + r cannot touch
             near = np.linalg.norm(pts[pi] - self._tc[ti], axis=1) - self._tr[ti] <= r + 1e-9
             pi, ti = pi[near], ti[near]
@@ -454,12 +455,32 @@ class StepperWorld:
         ref[list(fired0)] = True
         width = np.diff(marks)
         gaps = np.flatnonzero(width > 0)
-        for k in range(0, len(gaps), _BATCH):
-            idx = gaps[k : k + _BATCH]
+
+        def differ(idx: NDArray[np.intp]) -> NDArray[np.intp]:
             mid = 0.5 * (marks[idx] + marks[idx + 1])
             states = self._fired_many(a[None, :] + mid[:, None] * u[None, :])
-            for j in np.flatnonzero((states != ref[None, :]).any(axis=1)):
-                yield int(idx[j])
+            return idx[(states != ref[None, :]).any(axis=1)]
+
+        stride = _DENSE_STRIDE if self._dense and len(gaps) > 2 * _DENSE_STRIDE else 1
+        if stride == 1:
+            for k in range(0, len(gaps), _BATCH):
+                yield from (int(i) for i in differ(gaps[k : k + _BATCH]))
+            return
+        # a dense mesh: every triangle crossed adds gaps where nothing changes (coplanar
+        # neighbours); sample every stride-th gap, and look at every gap only before a change
+        done = 0  # gaps[:done] are settled
+        coarse = np.arange(stride - 1, len(gaps), stride)
+        for k in range(0, len(coarse), _BATCH):
+            hits = differ(gaps[coarse[k : k + _BATCH]])
+            if len(hits) == 0:
+                done = int(coarse[min(k + _BATCH, len(coarse)) - 1]) + 1
+                continue
+            first = int(np.searchsorted(gaps, hits[0]))
+            for j in range(done, first + 1, _BATCH):
+                yield from (int(i) for i in differ(gaps[j : min(j + _BATCH, first + 1)]))
+            done = first + 1
+        for j in range(done, len(gaps), _BATCH):
+            yield from (int(i) for i in differ(gaps[j : j + _BATCH]))
 
     def _run(self, kind: MotionKind, start: Vec3, direction: Vec3, length: float) -> Motion:
         a = np.asarray(start, dtype=float)
