@@ -37,7 +37,7 @@ from typing import Any
 
 import numpy as np
 
-from tactile_kb.errors import UsageError
+from tactile_kb.errors import TactileKBError, UsageError
 from tactile_kb.model import ObjectModel, build_model
 from tactile_kb.record import ExplorationRecord
 from tactile_kb.servo import Ending, Probe
@@ -233,7 +233,11 @@ class ModelCompleter:
             self._start = (record.touches, record.path_length)
         if last is not None and not last[1]:
             self._failed[last[0].reason] += 1
-        model = build_model(record)
+        try:
+            model = build_model(record)
+        except (TactileKBError, np.linalg.LinAlgError, ValueError) as exc:
+            text = f"the model cannot be built after {record.touches} touches: {exc}"
+            return Ending("unreachable", text, (str(exc),))
         wanted = completion_probes(model, height_gap=self.params.height_gap)
         open_items = [p.reason for p in wanted]
         if model.polyhedron is None and not wanted:
