@@ -52,6 +52,7 @@ from numpy.typing import NDArray
 
 from tactile_kb.errors import UsageError
 from tactile_kb.finger import Finger
+from tactile_kb.planes import nearest_points
 from tactile_kb.record import Contact, ExplorationRecord
 from tactile_kb.synthetic import mesh_faces
 
@@ -181,25 +182,13 @@ def rounded(mesh: trimesh.Trimesh, radius: float, *, iterations: int = 60) -> tr
     hard = np.flatnonzero((q @ normals.T - inner).max(axis=1) > 1e-12)
     if len(hard):
         near = np.flatnonzero((over[hard] > -radius).any(axis=0))  # planes that can matter
-        q[hard] = _dykstra(x[hard], normals[near], inner[near], iterations)
+        q[hard] = nearest_points(x[hard], normals[near], inner[near], iterations=iterations)
     away = x - q
     length = np.linalg.norm(away, axis=1)
     ok = length > 1e-12
     v = x.copy()
     v[ok] = q[ok] + radius * away[ok] / length[ok, None]
     return trimesh.Trimesh(v, mesh.faces, process=False)
-
-
-def _dykstra(x: FloatArray, normals: FloatArray, offsets: FloatArray, iterations: int) -> FloatArray:
-    """Nearest points of ``normals · q ≤ offsets`` to each row of ``x`` (Dykstra's method)."""
-    q = x.copy()
-    corr = np.zeros((len(normals), *x.shape))
-    for _ in range(iterations):
-        for i, (n, d) in enumerate(zip(normals, offsets, strict=True)):
-            y = q + corr[i]
-            q = y - np.maximum(y @ n - d, 0.0)[:, None] * n[None, :]
-            corr[i] = y - q
-    return q
 
 
 def _planes(mesh: trimesh.Trimesh) -> tuple[FloatArray, FloatArray]:
@@ -211,9 +200,7 @@ def _planes(mesh: trimesh.Trimesh) -> tuple[FloatArray, FloatArray]:
     return n[np.sort(first)], d[np.sort(first)]
 
 
-def perturb(
-    mesh: trimesh.Trimesh, level: int | Perturbation, *, seed: int = 0
-) -> trimesh.Trimesh:
+def perturb(mesh: trimesh.Trimesh, level: int | Perturbation, *, seed: int = 0) -> trimesh.Trimesh:
     """``mesh`` (watertight, resting on z = 0) made to look scanned; see the module's table.
 
     Parameters
@@ -266,7 +253,7 @@ def _subdivide(mesh: trimesh.Trimesh, p: Perturbation) -> trimesh.Trimesh:
     edge = p.resolution * float(mesh.extents.min())
     # equilateral triangles of edge e cover e²·√3/4 each; bisection ends between e/2 and e
     edge = max(edge, 2.0 * math.sqrt(4.0 / math.sqrt(3.0) * float(mesh.area) / p.max_triangles))
-    v, f = trimesh.remesh.subdivide_to_size(mesh.vertices, mesh.faces, max_edge=edge)
+    v, f = trimesh.remesh.subdivide_to_size(mesh.vertices, mesh.faces, max_edge=edge)  # type: ignore[no-untyped-call]
     return trimesh.Trimesh(v, f, process=True)
 
 
@@ -363,8 +350,9 @@ def _specks(
         speck = trimesh.creation.icosphere(subdivisions=1, radius=radius)
         speck.apply_translation(at)
         parts.append(speck)
-    return trimesh.util.concatenate(parts)
-
+    out = trimesh.util.concatenate(parts)
+    assert isinstance(out, trimesh.Trimesh)
+    return out
 
 
 def touch_record(
@@ -484,7 +472,9 @@ def _approach(
     active = np.ones(m, dtype=bool)
     while active.any() and float(t[active].min()) <= reach:
         idx = np.flatnonzero(active)
-        _, dist, _ = trimesh.proximity.closest_point(mesh, start[idx] + t[idx, None] * direction[idx])  # type: ignore[no-untyped-call]
+        _, dist, _ = trimesh.proximity.closest_point(
+            mesh, start[idx] + t[idx, None] * direction[idx]
+        )  # type: ignore[no-untyped-call]
         hit = dist <= rho
         hi[idx[hit]] = t[idx[hit]]
         lo[idx[~hit]] = t[idx[~hit]]
@@ -495,7 +485,9 @@ def _approach(
     idx = np.flatnonzero(found)
     while len(idx) and float((hi[idx] - lo[idx]).max()) > 1e-6:
         mid = (lo[idx] + hi[idx]) / 2
-        _, dist, _ = trimesh.proximity.closest_point(mesh, start[idx] + mid[:, None] * direction[idx])  # type: ignore[no-untyped-call]
+        _, dist, _ = trimesh.proximity.closest_point(
+            mesh, start[idx] + mid[:, None] * direction[idx]
+        )  # type: ignore[no-untyped-call]
         hit = dist <= rho
         hi[idx[hit]] = mid[hit]
         lo[idx[~hit]] = mid[~hit]

@@ -30,17 +30,39 @@ OBJECTS: list[tuple[str, str, tuple[float, float, float], tuple[tuple[int, int, 
     ("toy_prism", "pybullet_data/toys/prism.obj", (1.0, 1.0, 1.0), ((1, 0, 0), 90.0)),
     ("toy_half_cylinder", "pybullet_data/toys/cylinder.obj", (1.0, 1.0, 1.0), ((1, 0, 0), 180.0)),
     ("duck", "pybullet_data/duck.obj", (0.05, 0.05, 0.05), ((1, 0, 0), 90.0)),
-    ("cereal_box", "robosuite/models/assets/objects/meshes/cereal.stl", (1.0, 1.0, 1.0), ((1, 0, 0), 0.0)),
+    (
+        "cereal_box",
+        "robosuite/models/assets/objects/meshes/cereal.stl",
+        (1.0, 1.0, 1.0),
+        ((1, 0, 0), 0.0),
+    ),
     ("can", "robosuite/models/assets/objects/meshes/can.stl", (1.0, 1.0, 1.0), ((1, 0, 0), 0.0)),
-    ("milk_carton", "robosuite/models/assets/objects/meshes/milk.stl", (0.9, 0.9, 0.9), ((1, 0, 0), 0.0)),
-    ("lemon", "robosuite/models/assets/objects/meshes/lemon.stl", (1.5, 1.0, 1.0), ((1, 0, 0), 0.0)),
+    (
+        "milk_carton",
+        "robosuite/models/assets/objects/meshes/milk.stl",
+        (0.9, 0.9, 0.9),
+        ((1, 0, 0), 0.0),
+    ),
+    (
+        "lemon",
+        "robosuite/models/assets/objects/meshes/lemon.stl",
+        (1.5, 1.0, 1.0),
+        ((1, 0, 0), 0.0),
+    ),
 ]
 
 
-def vendor(source: Path, name: str, rel: str, scale: tuple[float, float, float],
-           turn: tuple[tuple[int, int, int], float]) -> trimesh.Trimesh:
+def vendor(
+    source: Path,
+    name: str,
+    rel: str,
+    scale: tuple[float, float, float],
+    turn: tuple[tuple[int, int, int], float],
+) -> trimesh.Trimesh:
     loaded = trimesh.load(str(source / rel), force="mesh", process=False)
-    mesh = trimesh.Trimesh(np.asarray(loaded.vertices) * np.asarray(scale), loaded.faces, process=True)
+    mesh = trimesh.Trimesh(
+        np.asarray(loaded.vertices) * np.asarray(scale), loaded.faces, process=True
+    )
     mesh.merge_vertices(merge_tex=True, merge_norm=True)
     if not mesh.is_watertight:  # seams a few µm apart (robosuite's can): weld them
         mesh.merge_vertices(merge_tex=True, merge_norm=True, digits_vertex=6)
@@ -65,8 +87,7 @@ def main(argv: list[str]) -> None:
         mesh = vendor(source, name, rel, scale, turn)
         out = HERE / f"{name}.ply"
         mesh.export(str(out), encoding="binary")
-        ext = ", ".join(f"{v * 100:.1f}" for v in mesh.extents)
-        print(f"{out.name}: {len(mesh.faces)} triangles, {ext} cm, {out.stat().st_size} bytes")
+        ", ".join(f"{v * 100:.1f}" for v in mesh.extents)
 
 
 if __name__ == "__main__":
