@@ -649,6 +649,11 @@ def edge_faces(
         # (and the table) when they close, where narrow edge faces do not cut them short;
         # else in the model as it stands
         widths = {kept[int(j)]: _width(full, fi) for fi, j in enumerate(full.plane_index)}
+        adjacent: dict[int, set[int]] = {}
+        for a, b in full.edge_faces:
+            fa, fb = kept[int(full.plane_index[a])], kept[int(full.plane_index[b])]
+            adjacent.setdefault(fa, set()).add(fb)
+            adjacent.setdefault(fb, set()).add(fa)
         core = [k for k in kept if faces[k].refined or faces[k].source != "contacts"]
         if len(core) < len(kept):
             try:
@@ -663,6 +668,10 @@ def edge_faces(
             f = faces[k]
             if f.source != "contacts" or not f.contacts or f.refined:
                 continue  # a face whose centres span a plane of its own is a face
+            if max((widths.get(j, 0.0) for j in adjacent.get(k, ())), default=1.0) < (
+                EDGE_MIN_WIDTH * rho
+            ):
+                continue  # only narrow faces around (a curved object): cheap early answer
             others = [j for j in kept if j != k]
             try:
                 poly = polyhedron_from_planes(normals[others], offsets[others], bound=bound)
