@@ -40,13 +40,14 @@ from typing import TYPE_CHECKING, Any, Literal, Protocol, runtime_checkable
 
 from tactile_kb.errors import PluginError, UsageError
 from tactile_kb.finger import Finger, load_finger
-from tactile_kb.objects import ObjectLike, check_thickness, load_object, object_name
+from tactile_kb.objects import NOTES_KEY, ObjectLike, check_thickness, load_object, object_name
 from tactile_kb.plugins import Registry
 from tactile_kb.record import ExplorationRecord
 
 if TYPE_CHECKING:
     import trimesh
 
+    from tactile_kb.completion import CompletionParams
     from tactile_kb.servo import Controller, ServoParams
     from tactile_kb.world import World
 
@@ -161,14 +162,19 @@ class WorldExplorer(abc.ABC):
     """Base of explorers that drive the shared servo controller in a :class:`~tactile_kb.world.World`.
 
     Subclasses set :attr:`name` and implement :meth:`make_world`. ``params`` are the servo
-    parameters (:class:`tactile_kb.servo.ServoParams`, default when ``None``); like a
+    parameters (:class:`tactile_kb.servo.ServoParams`, default when ``None``) and
+    ``completion`` the budget of the model-driven completion after contour following
+    (:class:`tactile_kb.completion.CompletionParams`, default when ``None``); like a
     scikit-learn estimator, ``__init__`` only stores them.
     """
 
     name: str = ""
 
-    def __init__(self, params: ServoParams | None = None) -> None:
+    def __init__(
+        self, params: ServoParams | None = None, *, completion: CompletionParams | None = None
+    ) -> None:
         self.params = params
+        self.completion = completion
 
     @abc.abstractmethod
     def make_world(
@@ -185,6 +191,7 @@ class WorldExplorer(abc.ABC):
         noise: float = 0.0,
     ) -> ServoSession:
         """Start a lazy exploration of ``obj`` (nothing is explored before :meth:`ServoSession.advance`)."""
+        from tactile_kb.completion import ModelCompleter
         from tactile_kb.servo import Controller, ServoParams
 
         if noise < 0:
@@ -202,7 +209,9 @@ class WorldExplorer(abc.ABC):
             object_name=object_name(obj),
             seed=seed,
             extra_params={"noise": float(noise)},
+            completer=ModelCompleter(self.completion),
         )
+        controller.notes.extend(str(n) for n in mesh.metadata.get(NOTES_KEY, []))
         return ServoSession(controller)
 
     def explore(

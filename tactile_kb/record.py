@@ -86,7 +86,9 @@ class Layer(BaseModel):
     z: float
     path: list[Vec3] = Field(default_factory=list, description="tip-centre path in this layer")
     contour: list[Vec2] = Field(
-        default_factory=list, description="the object's cross-section polygon, counter-clockwise"
+        default_factory=list,
+        description="the object's cross-section polygon, counter-clockwise (filled by records "
+        "of 0.1 only; the model traces contours from the contacts)",
     )
     closed: bool = Field(default=False, description="the contour returned to its first contact")
 
@@ -110,6 +112,14 @@ class ExplorationRecord(BaseModel):
     contacts_per_phase: dict[str, int] = Field(default_factory=dict)
     complete: bool = Field(default=True, description="False when lazy exploration stopped early")
     notes: list[str] = Field(default_factory=list)
+    ending: str = Field(
+        default="",
+        description="how the model-driven completion ended: 'closed' (a closed model, every "
+        "face touched at two heights), 'budget' or 'unreachable'; '' when none ran",
+    )
+    unreachable: list[str] = Field(
+        default_factory=list, description="what stayed open when the completion ended"
+    )
 
     @property
     def touches(self) -> int:
@@ -123,6 +133,19 @@ class ExplorationRecord(BaseModel):
             return 0.0
         p = np.asarray(self.path, dtype=float)
         return float(np.linalg.norm(np.diff(p, axis=0), axis=1).sum())
+
+    @property
+    def open_ending(self) -> str:
+        """Why the exploration ended without a closed model, in one line; "" when it closed
+        (or when no completion ran, as in records of version 0.1)."""
+        if self.ending in ("", "closed"):
+            return ""
+        what = {
+            "budget": "the completion budget ran out",
+            "unreachable": "what stayed open could not be reached",
+        }.get(self.ending, f"the exploration ended ({self.ending})")
+        still = "; ".join(self.unreachable) or "unknown"
+        return f"{what} after {self.touches} touches; still open: {still}"
 
     def to_json(self, *, indent: int | None = None) -> str:
         """The record as JSON text."""

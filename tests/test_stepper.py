@@ -13,6 +13,7 @@ from hypothesis import strategies as st
 from tactile_kb import solids
 from tactile_kb.errors import UsageError
 from tactile_kb.finger import builtin_finger
+from tactile_kb.model import build_model
 from tactile_kb.stepper import StepperExplorer, StepperWorld
 from tactile_kb.synthetic import mesh_planes
 from tactile_kb.world import CONTACT_TOL, World
@@ -243,8 +244,10 @@ def test_box_unions_contours_have_the_right_corners(name: str, corners: int) -> 
     z = 0.4 * 0.04
     truth = trimesh.intersections.mesh_plane(mesh, (0, 0, 1), (0, 0, z))  # type: ignore[no-untyped-call]
     assert len(truth) > 0
-    for layer in rec.layers:
-        assert layer.closed
+    assert all(layer.closed for layer in rec.layers)
+    sections = build_model(rec).layers  # the controller computes no geometry: the model does
+    assert len(sections) == len(rec.layers)
+    for layer in sections:
         assert len(layer.contour) == corners
         # every traced corner is a corner of the true cross-section (within 1 mm)
         pts = np.asarray(truth).reshape(-1, 3)[:, :2]
@@ -324,7 +327,8 @@ def test_the_4_sensor_finger_refuses_objects_turned_away_from_its_sensors(turn: 
     mesh = solids.rotate_about_z(solids.l_shape(0.1, 0.08, 0.04, 0.05), turn)
     if off <= ALIGN_4_DEG:
         rec = StepperExplorer().explore(mesh, finger="4", seed=0)
-        assert all(layer.closed and len(layer.contour) == 6 for layer in rec.layers)
+        assert all(layer.closed for layer in rec.layers)
+        assert all(len(layer.contour) == 6 for layer in build_model(rec).layers)
         assert not any("turned" in n for n in rec.notes)
         return
     with pytest.raises(ExplorationError, match=rf"turned {off:.0f}° from sensor \d of finger '4'"):

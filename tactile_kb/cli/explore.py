@@ -126,6 +126,8 @@ def _explore(args: argparse.Namespace) -> int:
         f"{args.path}: {record.touches} touches, {len(record.contacts)} contacts, "
         f"path {record.path_length:.3f} m → {out}"
     )
+    if record.open_ending:  # the record is written, but the model is not closed: say why
+        print(f"tactile-kb: warning: {args.path}: {record.open_ending}", file=sys.stderr)
     return 0
 
 

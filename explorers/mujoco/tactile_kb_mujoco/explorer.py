@@ -24,6 +24,7 @@ from tactile_kb_mujoco.world import MujocoWorld
 if TYPE_CHECKING:
     import trimesh
 
+    from tactile_kb.completion import CompletionParams
     from tactile_kb.servo import ServoParams
 
 __all__ = ["MujocoExplorer"]
@@ -45,6 +46,8 @@ class MujocoExplorer(WorldExplorer):
         Touch-sensor force above which a sensor is ON, newtons.
     options
         The scene's physical parameters (:class:`~tactile_kb_mujoco.scene.SceneOptions`).
+    completion
+        Budget of the model-driven completion (:class:`tactile_kb.completion.CompletionParams`).
     """
 
     name = "mujoco"
@@ -57,8 +60,9 @@ class MujocoExplorer(WorldExplorer):
         press: float = 1e-4,
         threshold: float = 0.0,
         options: SceneOptions | None = None,
+        completion: CompletionParams | None = None,
     ) -> None:
-        super().__init__(params)
+        super().__init__(params, completion=completion)
         self.speed = speed
         self.press = press
         self.threshold = threshold
