@@ -128,10 +128,14 @@ def completion_probes(model: ObjectModel, *, height_gap: float | None = None) ->
                 continue  # under the object: the table
             if d[2] > 0.9:
                 target = np.array([mid[0], mid[1], hi[2]])
-                probes.append(Probe(_v(target), (0.0, 0.0, 1.0), reach, "open towards +z"))
+                probes.append(
+                    Probe(_v(target), (0.0, 0.0, 1.0), reach, "open towards +z", middle=True)
+                )
             else:
                 target = np.array([mid[0], mid[1], z_mid])
-                probes.append(Probe(_v(target), _v(d), reach, f"open towards {_name(d)}"))
+                probes.append(
+                    Probe(_v(target), _v(d), reach, f"open towards {_name(d)}", middle=True)
+                )
         unique = {p.reason: p for p in reversed(probes)}  # the first of each direction
         return [p for p in probes if unique[p.reason] is p]
     poly = model.polyhedron
@@ -199,7 +203,7 @@ def _over_the_rim(record: ExplorationRecord, probe: Probe) -> Probe:
     if length < 1e-9:
         return probe
     point = top + inwards / length * min(length, 1.5 * record.tip_radius)
-    return Probe(_v(point), probe.normal, probe.reach, probe.reason)
+    return Probe(_v(point), probe.normal, probe.reach, probe.reason, middle=False)
 
 
 def _v(a: FloatArray) -> tuple[float, float, float]:

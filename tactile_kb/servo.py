@@ -206,6 +206,10 @@ class Probe:
     normal: Vec3
     reach: float
     reason: str
+    middle: bool = False
+    """Aim at the middle of the hint box (the visual estimate of where the object is) rather
+    than at ``target``'s horizontal position: for a side never touched, where the touched
+    points say little about where the object's middle is."""
 
 
 @dataclass(frozen=True)
@@ -547,6 +551,8 @@ class Controller:
         normal = _unit(np.asarray(p.normal, dtype=float))
         target = np.asarray(p.target, dtype=float)
         hint = self.world.hint
+        if p.middle:
+            target[:2] = np.asarray(hint.centre, dtype=float)[:2]
         lo, hi = np.asarray(hint.lo, dtype=float), np.asarray(hint.hi, dtype=float)
         clear = self.rho + self.params.approach_margin
         # along the normal out of the hint box: the approach starts outside the object
@@ -576,7 +582,11 @@ class Controller:
         f = self._follow(m.closed)
         self._record(m, f, "touch")
         if float(f.r0 @ -normal) < math.cos(math.radians(60.0)):
-            return False  # touched, but not a surface facing the approach
+            self._note(
+                f"a probe ({p.reason}) touched at {_fmt(m.end)} a surface facing "
+                f"{_fmt(_v3(-f.r0))}, not the approach"
+            )
+            return False
         pos = np.asarray(m.end, dtype=float)
         t = self._tangent(f)
         if t is None:  # a top: slide along any horizontal direction
@@ -1057,6 +1067,7 @@ class Controller:
         # the controller computes no geometry: the model traces contours from the contacts
         self.layers.append(Layer(index=index, z=float(z), path=list(path), closed=closed))
 
+
 class _SideProbes:
     """The probe phase: every surface that only one layer slid along (narrow there, or skipped
     by a search cycle) is touched once more at another height, approached along its normal
@@ -1217,7 +1228,6 @@ class _TopPhase:
         if moved < c.edge_slide:
             del c.contacts[first:]
             c._note(f"the touch from above at {_fmt(m.end)} is an apex or an edge: not a plane")
-
 
 
 @dataclass
