@@ -614,7 +614,8 @@ def edge_faces(
     lies against (the largest rounding of such an edge penetrates by about its radius) plus
     :data:`EDGE_SIGMAS` × ``noise``/√m, and that face is at least
     :data:`EDGE_MIN_WIDTH` tip radii wide. Only faces whose centres span no plane of their own
-    (one contact, or contacts along a line: a slide along the edge) are candidates; they are
+    (one contact, or contacts along a line) and no more touched than the faces they lie
+    against (an edge is touched in passing, a face is explored) are candidates; they are
     removed one at a time, those with fewest contacts first, while the others still close; at most ``max_faces`` faces are examined (a curved
     object's many narrow faces are left to the curvature tests).
 
@@ -694,6 +695,8 @@ def edge_faces(
             width = max((widths.get(j, 0.0) for j in against), default=0.0)
             if width < EDGE_MIN_WIDTH * rho:
                 continue  # against narrow faces (a small or curved object) a face stays
+            if any(faces[j].n_contacts < f.n_contacts for j in against if faces[j].contacts):
+                continue  # touched more than a face it lies against: explored as a face
             allowed = rounding * width + EDGE_SIGMAS * noise / math.sqrt(len(c))
             if float(penetration.max()) <= allowed:
                 best = k
