@@ -553,6 +553,9 @@ class Controller:
         touch is followed by a short slide each way along the surface (more tip centres on it).
         """
         normal = _unit(np.asarray(p.normal, dtype=float))
+        if self.finger.nearest(_v3(-normal)) is None:
+            self._note(f"no sensor of finger {self.finger.name!r} faces a probe ({p.reason})")
+            return False
         target = np.asarray(p.target, dtype=float)
         hint = self.world.hint
         if p.middle:
