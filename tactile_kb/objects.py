@@ -1,7 +1,8 @@
 """Objects to explore: meshes from STL, OBJ or PLY (or a trimesh.Trimesh), checked and put on the table.
 
 :func:`load_object` reads a mesh in metres with trimesh, validates it (readable, not empty,
-watertight, no degenerate volume, fits the workspace) and rests it on the table: the lowest
+a solid, one object, fits the workspace), cleans it (floating specks dropped, holes filled)
+and rests it on the table: the lowest
 point is moved to z = 0, the orientation and the x–y position are kept. Every problem is one
 :class:`~tactile_kb.errors.ObjectError` line naming the file. The input mesh is never modified:
 the result is a copy.
@@ -31,12 +32,15 @@ from tactile_kb.errors import ObjectError
 __all__ = [
     "MAX_SIZE",
     "MIN_SIZE",
+    "NOTES_KEY",
     "OBJECT_SUFFIXES",
+    "SPECK_FRACTION",
     "THIN_FACTOR",
     "WORKSPACE_HALF_WIDTH",
     "ObjectLike",
     "check_thickness",
     "load_object",
+    "min_width",
     "object_name",
 ]
 
@@ -54,6 +58,14 @@ MIN_SIZE = 0.002
 THIN_FACTOR = 1.5
 """An object must be at least this many tip radii wide in every direction (:func:`check_thickness`);
 measured: a 5 mm tip classifies a 7.5 mm plate standing on its edge, not a 7 mm one."""
+
+SPECK_FRACTION = 0.1
+"""A separate body whose bounding-box diagonal is under this fraction of the largest body's is a
+floating speck (scan debris): it is dropped with a note. Larger second bodies are refused."""
+
+NOTES_KEY = "tactile_kb_notes"
+"""Key of ``mesh.metadata`` under which :func:`load_object` lists what it changed (specks
+dropped, holes filled, an open mesh kept as it is); explorers copy them into the record."""
 
 WORKSPACE_HALF_WIDTH = 0.5
 """Metres: every point of the object must lie within this distance of the z axis in x and y."""
@@ -89,18 +101,36 @@ def _read(path: Path) -> trimesh.Trimesh:
     return loaded
 
 
-def _min_width(mesh: trimesh.Trimesh) -> float:
-    """The smallest width of the mesh's convex hull (over the hull's face normals), metres."""
+HULL_POINTS = 4000
+"""At most this many hull vertices enter the width computation (:func:`min_width`)."""
+
+
+def min_width(mesh: trimesh.Trimesh) -> float:
+    """The smallest width of the mesh's convex hull (over the hull's face normals), metres.
+
+    A dense hull (a scanned sphere has every vertex on it) is first reduced to
+    :data:`HULL_POINTS` of its vertices, evenly spread along trimesh's order: the reduced hull
+    lies inside the true one, so the width is never overestimated (a thin plate is never let
+    through), and it is smaller by at most the spacing's sagitta. The spans are computed in
+    blocks of normals, never as one vertices × normals matrix.
+    """
     try:
         hull = mesh.convex_hull
+        pts = np.asarray(hull.vertices, dtype=float)
+        if len(pts) > HULL_POINTS:
+            pts = pts[np.linspace(0, len(pts) - 1, HULL_POINTS).astype(np.intp)]
+            hull = trimesh.convex.convex_hull(pts)
+            pts = np.asarray(hull.vertices, dtype=float)
     except Exception:  # a flat or degenerate point set: Qhull cannot build a hull
         return 0.0
-    pts = np.asarray(hull.vertices, dtype=float)
     normals = np.asarray(hull.face_normals, dtype=float)
     if len(normals) == 0:
         return 0.0
-    spans = pts @ normals.T
-    return float((spans.max(axis=0) - spans.min(axis=0)).min())
+    width = np.inf
+    for k in range(0, len(normals), 512):
+        spans = pts @ normals[k : k + 512].T
+        width = min(width, float((spans.max(axis=0) - spans.min(axis=0)).min()))
+    return float(width)
 
 
 def check_thickness(mesh: trimesh.Trimesh, tip_radius: float, *, name: str = "<mesh>") -> None:
@@ -118,7 +148,7 @@ def check_thickness(mesh: trimesh.Trimesh, tip_radius: float, *, name: str = "<m
     ...
     tactile_kb.errors.ObjectError: plate.stl: too thin for the finger: 4 mm across at its thinnest, a tip of radius 5 mm needs at least 7.5 mm
     """
-    width = _min_width(mesh)
+    width = min_width(mesh)
     need = THIN_FACTOR * tip_radius
     if width < need:
         raise ObjectError(
@@ -140,9 +170,13 @@ def load_object(obj: ObjectLike, *, name: str | None = None) -> trimesh.Trimesh:
     Raises
     ------
     ObjectError
-        Unreadable file, empty mesh, non-finite coordinates, more than one body, open (not
-        watertight) mesh, degenerate (no volume or thinner than :data:`MIN_SIZE`), or larger
-        than the workspace. The tip's own limit is :func:`check_thickness`.
+        Unreadable file, empty mesh, non-finite coordinates, more than one object (bodies
+        other than floating specks, :data:`SPECK_FRACTION`), not a solid (a plane, a line, a
+        point set: no volume or thinner than :data:`MIN_SIZE`), or larger than the workspace.
+        The tip's own limit is :func:`check_thickness`.
+
+    Specks are dropped and holes filled (``trimesh.repair.fill_holes``); a mesh trimesh cannot
+    close is explored as it is. Each such change is listed in ``mesh.metadata[NOTES_KEY]``.
     """
     label = name or object_name(obj)
     if isinstance(obj, str | Path):
@@ -160,22 +194,22 @@ def load_object(obj: ObjectLike, *, name: str | None = None) -> trimesh.Trimesh:
     if not finite:
         raise ObjectError(f"{label}: the mesh has non-finite (NaN or infinite) vertex coordinates")
     mesh.process()
-    bodies = int(mesh.body_count)
-    if bodies > 1:
-        raise ObjectError(
-            f"{label}: the mesh holds {bodies} separate bodies; explore one object at a time"
-        )
+    notes: list[str] = []
+    if int(mesh.body_count) > 1:
+        mesh = _keep_largest(mesh, label, notes)
     extent = mesh.extents
     if float(extent.min()) < MIN_SIZE:
         raise ObjectError(
-            f"{label}: degenerate mesh: {float(extent.min()) * 1000:.3g} mm thick "
-            f"(at least {MIN_SIZE * 1000:g} mm needed)"
+            f"{label}: not a solid: {float(extent.min()) * 1000:.3g} mm thick "
+            f"(at least {MIN_SIZE * 1000:g} mm needed; a single plane, a line or a point set "
+            "cannot be touched all round): degenerate mesh"
         )
     if not mesh.is_watertight:
-        raise ObjectError(f"{label}: the mesh is open (not watertight); close it first")
-    volume = abs(float(mesh.volume))
+        mesh = _close(mesh, label, notes)
+    solid = mesh if mesh.is_watertight else mesh.convex_hull
+    volume = abs(float(solid.volume))
     if volume < MIN_SIZE**3:
-        raise ObjectError(f"{label}: degenerate mesh: no volume")
+        raise ObjectError(f"{label}: not a solid: degenerate mesh with no volume")
     if float(extent.max()) > MAX_SIZE:
         raise ObjectError(
             f"{label}: larger than the workspace: {float(extent.max()):.3g} m across "
@@ -190,9 +224,49 @@ def load_object(obj: ObjectLike, *, name: str | None = None) -> trimesh.Trimesh:
             f"{label}: lies outside the workspace (|x|, |y| ≤ {WORKSPACE_HALF_WIDTH:g} m); "
             "move it near the origin"
         )
-    if float(mesh.volume) < 0:
+    if mesh.is_watertight and float(mesh.volume) < 0:
         mesh.invert()
     mesh.apply_translation((0.0, 0.0, -float(lo[2])))
     mesh.metadata["moved_z"] = -float(lo[2])  # reported in the exploration's notes
     mesh.metadata["name"] = label
+    mesh.metadata[NOTES_KEY] = notes
+    return mesh
+
+
+def _keep_largest(mesh: trimesh.Trimesh, label: str, notes: list[str]) -> trimesh.Trimesh:
+    """The largest body of ``mesh`` when every other body is a speck (:data:`SPECK_FRACTION`)."""
+    bodies = list(mesh.split(only_watertight=False))
+    if len(bodies) < 2:
+        return mesh
+    sizes = np.array([float(np.linalg.norm(b.extents)) for b in bodies])
+    main = int(np.argmax(sizes))
+    others = [k for k in range(len(bodies)) if k != main]
+    large = [k for k in others if sizes[k] >= SPECK_FRACTION * sizes[main]]
+    if large:
+        raise ObjectError(
+            f"{label}: the mesh holds {len(bodies)} separate bodies; explore one object at a time"
+        )
+    notes.append(
+        f"{label}: {len(others)} floating speck(s) dropped (each under "
+        f"{SPECK_FRACTION:.0%} of the object's size); the largest body is explored"
+    )
+    kept: trimesh.Trimesh = bodies[main]
+    return kept
+
+
+def _close(mesh: trimesh.Trimesh, label: str, notes: list[str]) -> trimesh.Trimesh:
+    """``mesh`` with its holes filled by trimesh when it can; else as it is, with a note."""
+    repaired = mesh.copy()
+    with np.errstate(all="ignore"), warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        trimesh.repair.fill_holes(repaired)
+    if repaired.is_watertight:
+        notes.append(f"{label}: holes in the mesh filled (trimesh.repair.fill_holes)")
+        return repaired
+    trimesh.repair.fix_normals(mesh)  # type: ignore[no-untyped-call]
+    boundary = int(np.sum(np.bincount(mesh.edges_unique_inverse) == 1))
+    notes.append(
+        f"{label}: the mesh is open ({boundary} boundary edges trimesh cannot fill); "
+        "explored as it is"
+    )
     return mesh

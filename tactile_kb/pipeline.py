@@ -28,6 +28,7 @@ from pathlib import Path
 from typing import Any
 
 from tactile_kb.bindings import binding_problems
+from tactile_kb.completion import completing
 from tactile_kb.errors import RuleFileError, UsageError
 from tactile_kb.features.builtin import get_feature, measure, measure_names
 from tactile_kb.geometry.model import ObjectModel, build_model
@@ -45,6 +46,7 @@ __all__ = [
     "binding_problems",
     "classify",
     "classify_record",
+    "explorer_for",
     "knowledge_base",
 ]
 
@@ -209,6 +211,13 @@ def _decide(kb: KnowledgeBase, evidence: _Evidence) -> tuple[Decision, dict[str,
     return kb.decide(providers), per_phase
 
 
+def explorer_for(explorer: str | Explorer) -> Explorer:
+    """The explorer named (or given), with the model-driven completion attached
+    (:func:`tactile_kb.completion.completing`): how :func:`classify` and the command line
+    explore."""
+    return completing(get_explorer(explorer))
+
+
 def classify(
     obj: ObjectLike,
     *,
@@ -240,7 +249,7 @@ def classify(
         raise UsageError(f"--noise must be ≥ 0 metres, got {noise}")
     t0 = time.perf_counter()
     kb = knowledge_base(rules)
-    session = get_explorer(explorer).session(obj, finger=finger, seed=seed, noise=noise)
+    session = explorer_for(explorer).session(obj, finger=finger, seed=seed, noise=noise)
     evidence = _Evidence(session.advance, None)
     decision, per_phase = _decide(kb, evidence)
     # Explore no further than the decision needed, unless its class reports measures of the

@@ -132,6 +132,14 @@ class ExplorationRecord(BaseModel):
     contacts_per_phase: dict[str, int] = Field(default_factory=dict)
     complete: bool = Field(default=True, description="False when lazy exploration stopped early")
     notes: list[str] = Field(default_factory=list)
+    ending: str = Field(
+        default="",
+        description="how the model-driven completion ended: 'closed' (a closed model, every "
+        "face touched at two heights), 'budget' or 'unreachable'; '' when none ran",
+    )
+    unreachable: list[str] = Field(
+        default_factory=list, description="what stayed open when the completion ended"
+    )
 
     @model_validator(mode="before")
     @classmethod
@@ -155,6 +163,19 @@ class ExplorationRecord(BaseModel):
             return 0.0
         p = np.asarray(self.path, dtype=float)
         return float(np.linalg.norm(np.diff(p, axis=0), axis=1).sum())
+
+    @property
+    def open_ending(self) -> str:
+        """Why the exploration ended without a closed model, in one line; "" when it closed
+        (or when no completion ran, as in records of version 0.1)."""
+        if self.ending in ("", "closed"):
+            return ""
+        what = {
+            "budget": "the exploration's budget ran out",
+            "unreachable": "what stayed open could not be reached",
+        }.get(self.ending, f"the exploration ended ({self.ending})")
+        still = "; ".join(self.unreachable) or "unknown"
+        return f"{what} after {self.touches} touches; still open: {still}"
 
     def to_json(self, *, indent: int | None = None) -> str:
         """The record as JSON text."""

@@ -24,6 +24,7 @@ from tactile_kb.features.builtin import (
     edge_uncertainties,
     evaluate_feature,
     face_angles,
+    face_sagitta,
     feature_registry,
     get_feature,
     lateral_common_point,
@@ -404,7 +405,9 @@ def test_base_and_lateral_edges_do_not_depend_on_the_resting_face(
         assert get_feature("lateral_faces_vertical").fn(model) is parallel
 
 
-def test_curved_when_one_face_fires_sensors_far_apart() -> None:
+def test_a_neighbouring_sensor_does_not_make_a_face_curved() -> None:
+    # a contact inside a face reporting a direction 12° off (the rim of an embossed letter,
+    # a rounded edge) is no evidence of curvature: its position lies on the plane
     rec = sample_record(solids.box(0.08, 0.08, 0.08), FINGER, per_face=8, quantise=False, noise=0.0)
     model = build_model(rec)
     face = model.contact_faces[0]
@@ -418,8 +421,35 @@ def test_curved_when_one_face_fires_sensors_far_apart() -> None:
     contacts[i] = contacts[i].model_copy(update={"direction": tuple(float(x) for x in turned)})
     changed = build_model(rec.model_copy(update={"contacts": contacts}))
     assert not get_feature("surface_curved").fn(model)
-    assert get_feature("surface_curved").fn(changed, spread_deg=10.0)
-    assert not get_feature("surface_curved").fn(changed, spread_deg=15.0)
+    assert not get_feature("surface_curved").fn(changed)
+    # but its centre off the plane by more than 0.3 ρ is
+    moved = list(contacts)
+    c = np.asarray(rec.contacts[i].centre) - 0.004 * face.normal_array
+    moved[i] = moved[i].model_copy(update={"centre": tuple(float(x) for x in c)})
+    off = build_model(rec.model_copy(update={"contacts": moved}))
+    assert get_feature("surface_curved").fn(off) or len(off.contact_faces) > 5
+
+
+def test_curvature_is_measured_over_the_face() -> None:
+    # tip centres on a cylinder of radius R bend by w²/8R over a width w; on a plane not at all
+    rec = sample_record(solids.box(0.1, 0.1, 0.05), FINGER, per_face=12, quantise=False, noise=0.0)
+    model = build_model(rec)
+    top = max(model.contact_faces, key=lambda f: f.normal[2])
+    sag, extent = face_sagitta(model, top)
+    assert sag < 1e-9
+    assert extent > 0.03
+    big_r = 0.5
+    contacts = list(rec.contacts)
+    for i in top.contacts:
+        x, y, z = contacts[i].centre
+        contacts[i] = contacts[i].model_copy(update={"centre": (x, y, z - x * x / (2 * big_r))})
+    bent = build_model(rec.model_copy(update={"contacts": contacts}))
+    face = max(bent.contact_faces, key=lambda f: f.normal[2])
+    sag, extent = face_sagitta(bent, face)
+    xs = [contacts[i].centre[0] for i in face.contacts]
+    assert sag == pytest.approx((max(xs) - min(xs)) ** 2 / (8 * big_r), rel=0.35)
+    assert get_feature("surface_curved").fn(bent, sagitta_tol=0.5 * sag)
+    assert not get_feature("surface_curved").fn(bent, sagitta_tol=2 * sag)
 
 
 @pytest.mark.parametrize(

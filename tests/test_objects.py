@@ -8,8 +8,10 @@ import numpy as np
 import pytest
 import trimesh
 
+from tactile_kb.completion import model_completer
 from tactile_kb.errors import ObjectError
-from tactile_kb.objects import MAX_SIZE, load_object, object_name
+from tactile_kb.objects import MAX_SIZE, NOTES_KEY, load_object, min_width, object_name
+from tactile_kb.touch.stepper import StepperExplorer
 
 
 def floating_box() -> trimesh.Trimesh:
@@ -87,11 +89,32 @@ def test_empty_mesh(tmp_path: Path) -> None:
         load_object(trimesh.Trimesh())
 
 
-def test_open_mesh() -> None:
+def test_a_mesh_with_a_hole_is_filled_with_a_note() -> None:
     box = trimesh.creation.box((0.05, 0.05, 0.05))
-    open_box = trimesh.Trimesh(box.vertices, box.faces[:-2])
-    with pytest.raises(ObjectError, match="open"):
-        load_object(open_box, name="lid.stl")
+    open_box = trimesh.Trimesh(box.vertices, box.faces[:-1])  # one triangle missing
+    assert not open_box.is_watertight
+    mesh = load_object(open_box, name="lid.stl")
+    assert mesh.is_watertight
+    assert mesh.volume == pytest.approx(0.05**3)
+    assert mesh.metadata[NOTES_KEY] == [
+        "lid.stl: holes in the mesh filled (trimesh.repair.fill_holes)"
+    ]
+
+
+def test_a_mesh_trimesh_cannot_close_is_explored_as_it_is() -> None:
+    # a cup: a cylinder without its top (a 48-sided hole trimesh does not fill)
+    cup = trimesh.creation.cylinder(radius=0.03, height=0.05, sections=48)
+    top = cup.face_normals[:, 2] > 0.99
+    open_cup = trimesh.Trimesh(cup.vertices, cup.faces[~top])
+    mesh = load_object(open_cup, name="cup.stl")
+    assert not mesh.is_watertight
+    (note,) = mesh.metadata[NOTES_KEY]
+    assert note == (
+        "cup.stl: the mesh is open (48 boundary edges trimesh cannot fill); explored as it is"
+    )
+    rec = StepperExplorer(completer=model_completer()).explore(mesh, seed=0)
+    assert note in rec.notes
+    assert rec.touches > 0
 
 
 def test_degenerate_mesh() -> None:
@@ -196,3 +219,57 @@ def test_explorers_reject_thin_objects_before_exploring() -> None:
 
     fine = builtin_finger("33", radius=0.003)
     assert StepperExplorer().session(plate, finger=fine).done is False
+
+
+def test_floating_specks_are_dropped_with_a_note(tmp_path: Path) -> None:
+    body = trimesh.creation.box((0.06, 0.05, 0.04))
+    specks = [trimesh.creation.icosphere(subdivisions=1, radius=0.001) for _ in range(3)]
+    for k, speck in enumerate(specks):
+        speck.apply_translation((0.05 + 0.01 * k, 0.0, 0.0))
+    path = tmp_path / "scan.stl"
+    trimesh.util.concatenate([body, *specks]).export(path)
+    mesh = load_object(path)
+    assert mesh.body_count == 1
+    assert mesh.volume == pytest.approx(0.06 * 0.05 * 0.04)
+    assert mesh.metadata[NOTES_KEY] == [
+        f"{path}: 3 floating speck(s) dropped (each under 10% of the object's size); "
+        "the largest body is explored"
+    ]
+    rec = StepperExplorer(completer=model_completer()).explore(path, seed=0)
+    assert mesh.metadata[NOTES_KEY][0] in rec.notes
+
+
+def test_a_second_body_larger_than_a_speck_is_refused() -> None:
+    a = trimesh.creation.box((0.06, 0.05, 0.04))
+    b = trimesh.creation.box((0.01, 0.01, 0.01))  # 17 % of the box's diagonal
+    b.apply_translation((0.08, 0.0, 0.0))
+    with pytest.raises(ObjectError, match="holds 2 separate bodies; explore one object at a time"):
+        load_object(trimesh.util.concatenate([a, b]), name="two")
+
+
+@pytest.mark.parametrize(
+    ("what", "text"),
+    [
+        ("plane", "v 0 0 0\nv 0.05 0 0\nv 0 0.05 0\nv 0.05 0.05 0\nf 1 2 3\nf 2 4 3\n"),
+        ("line", "v 0 0 0\nv 0.05 0 0\nv 0.1 0 0\nf 1 2 3\n"),
+        ("points", "v 0 0 0\nv 0.05 0 0\nv 0 0.05 0\nv 0 0 0.05\n"),
+    ],
+)
+def test_a_mesh_that_is_not_a_solid_is_one_line(tmp_path: Path, what: str, text: str) -> None:
+    path = tmp_path / f"{what}.obj"
+    path.write_text(text)
+    with pytest.raises(ObjectError) as info:
+        load_object(path)
+    message = str(info.value)
+    assert message.startswith(f"{path}: ")
+    assert "\n" not in message
+    assert ("not a solid" in message) or ("no triangles" in message)
+
+
+def test_the_width_of_a_dense_hull_is_computed_without_a_dense_matrix() -> None:
+    # 82k triangles, every vertex on the hull: 0.1 issued a 25 GiB vertices x normals matrix
+    sphere = trimesh.creation.icosphere(subdivisions=6, radius=0.04)
+    assert min_width(sphere) == pytest.approx(0.08, abs=5e-4)
+    assert min_width(sphere) <= 0.08 + 1e-12  # never overestimated
+    plate = trimesh.creation.box((0.05, 0.05, 0.004))
+    assert min_width(plate) == pytest.approx(0.004)

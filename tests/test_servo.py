@@ -71,7 +71,7 @@ class ScriptedWorld:
         return self._answer("slide", start, direction, length, sensor)
 
 
-P = ServoParams()
+P = ServoParams(comply=False)  # the paper's rules, motion by motion (riding is tested below)
 
 
 def _dir(call: Call) -> tuple[float, ...]:
@@ -218,7 +218,7 @@ def test_motion_budget_ends_the_exploration_with_a_note() -> None:
     steps += [("release", 0.001, ()), ("touch", 0.001, (0,))] * 200
     script = deque(steps)
     world = ScriptedWorld(script)
-    c = Controller(world, ServoParams(max_motions=30))
+    c = Controller(world, ServoParams(max_motions=30, comply=False))
     marks = list(c.run())
     assert marks[-1] == "complete"
     assert c.motions == 30

@@ -221,7 +221,9 @@ def test_box_unions_contours_have_the_right_corners(name: str, corners: int) -> 
     truth = trimesh.intersections.mesh_plane(mesh, (0, 0, 1), (0, 0, z))  # type: ignore[no-untyped-call]
     assert len(truth) > 0
     assert all(layer.closed for layer in rec.layers)
-    for layer in build_model(rec).layers:  # the model computes the contours from the contacts
+    sections = build_model(rec).layers  # the controller computes no geometry: the model does
+    assert len(sections) == len(rec.layers)
+    for layer in sections:
         assert len(layer.contour) == corners
         # every traced corner is a corner of the true cross-section (within 1 mm)
         pts = np.asarray(truth).reshape(-1, 3)[:, :2]

@@ -79,14 +79,13 @@ def _classify(args: argparse.Namespace) -> int:
     items = object_inputs(args)
     if args.plot is not None:
         check_picture(args.plot, "--plot")
-    from tactile_kb.pipeline import classify, classify_record, knowledge_base
+    from tactile_kb.pipeline import classify, classify_record, explorer_for, knowledge_base
     from tactile_kb.record import ExplorationRecord
-    from tactile_kb.touch.explorers import get_explorer
     from tactile_kb.touch.finger import load_finger
 
     # Everything shared by the objects is checked before the first one is touched.
     kb = knowledge_base(args.rules)
-    explorer = get_explorer(args.explorer) if args.paths else None
+    explorer = explorer_for(args.explorer) if args.paths else None
     finger = load_finger(args.finger)
     check_noise(args.noise, finger)
     pictures = picture_paths(args.plot, [item for item, _ in items]) if args.plot else []
@@ -132,10 +131,10 @@ def _explore(args: argparse.Namespace) -> int:
         raise UsageError(f"--out {args.out}: directory {str(out.parent)!r} does not exist")
     if not os.access(out.parent, os.W_OK):
         raise UsageError(f"--out {args.out}: directory {str(out.parent)!r} is not writable")
-    from tactile_kb.touch.explorers import get_explorer
+    from tactile_kb.pipeline import explorer_for
     from tactile_kb.touch.finger import load_finger
 
-    explorer = get_explorer(args.explorer)
+    explorer = explorer_for(args.explorer)
     finger = load_finger(args.finger)
     check_noise(args.noise, finger)
     outs = record_paths(args.out, args.paths)
@@ -150,6 +149,8 @@ def _explore(args: argparse.Namespace) -> int:
             continue
         for note in notices(record):
             print(f"tactile-kb explore: note: {path}: {note}", file=sys.stderr, flush=True)
+        if record.open_ending:  # the record is written, but the model is not closed: say why
+            print(f"tactile-kb explore: warning: {path}: {record.open_ending}", file=sys.stderr)
         print(
             f"{path}: {record.touches} touches, {len(record.contacts)} contacts, "
             f"path {record.path_length:.3f} m → {target}",
@@ -164,12 +165,11 @@ def record_paths(base: str, items: list[str]) -> list[Path]:
 
 
 def _demo(args: argparse.Namespace) -> int:
-    from tactile_kb.pipeline import classify, knowledge_base
+    from tactile_kb.pipeline import classify, explorer_for, knowledge_base
     from tactile_kb.solids import fig5_objects
-    from tactile_kb.touch.explorers import get_explorer
 
     kb = knowledge_base("parallelepipeds")
-    explorer = get_explorer(args.explorer)
+    explorer = explorer_for(args.explorer)
     code = EXIT_OK
     for name, mesh, _expected in fig5_objects():
         try:

@@ -128,14 +128,14 @@ def _line(plan: Any) -> str:
 def _grasp(args: argparse.Namespace) -> int:
     from tactile_kb.geometry.model import build_model
     from tactile_kb.grasp.planner import plan_grasp
+    from tactile_kb.pipeline import explorer_for
     from tactile_kb.record import ExplorationRecord
-    from tactile_kb.touch.explorers import get_explorer
     from tactile_kb.touch.finger import load_finger
 
     items = object_inputs(args)
     if args.plot is not None:
         check_picture(args.plot, "--plot", args.size, args.dpi)
-    explorer = get_explorer(args.explorer) if args.paths else None
+    explorer = explorer_for(args.explorer) if args.paths else None
     finger = load_finger(args.finger)
     check_noise(args.noise, finger)
     pictures = picture_paths(args.plot, [item for item, _ in items]) if args.plot else []

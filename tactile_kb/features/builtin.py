@@ -19,11 +19,13 @@ parameter                      meaning                                          
 ``tolerance_deg``              angle below which two directions count as equal      5°
 ``sigmas``                     faces' normal uncertainties widen the tolerance:     3
                                ``max(tolerance_deg, sigmas·√(u₁² + u₂²))``
-``residual_tol``               RMS misfit (m) of a face's contacts meaning curved   1.5 mm
+``residual_tol``               RMS misfit (m) of a face's tip centres meaning       0.3 ρ, ≥ 3σ
+                               curved (ρ the tip radius, σ the declared noise)
+``sagitta_tol``                bending (m) of a face's tip centres over the face    max(0.2 ρ,
+                               meaning curved (:func:`face_sagitta`)                3 % extent,
+                                                                                    4σ)
 ``smooth_deg``                 edges whose normals differ by less are "smooth"      35°
 ``min_smooth_edges``           that many smooth edges mean curved                   6
-``spread_deg``                 contact directions of one face further apart mean    10°
-                               curved (a plane fires the same sensors everywhere)
 ``rel_tol``                    relative spread of lengths counted as equal          0.06
                                (edges: or within ``sigmas`` × their uncertainty,
                                ``sigmas`` = 4 for ``equal_edges``)
@@ -78,6 +80,7 @@ from tactile_kb.plugins import Registry
 if TYPE_CHECKING:  # the geometry (scipy) is imported when a feature is evaluated, so that
     # checking a rule file's bindings stays light
     from tactile_kb.geometry.model import ObjectModel
+    from tactile_kb.geometry.planes import Face
     from tactile_kb.geometry.polyhedron import Polyhedron
     from tactile_kb.types import FloatArray
 
@@ -89,6 +92,7 @@ __all__ = [
     "edge_uncertainties",
     "evaluate_feature",
     "face_angles",
+    "face_sagitta",
     "feature_registry",
     "get_feature",
     "lateral_common_point",
@@ -106,7 +110,16 @@ FeatureFn = Callable[..., bool]
 
 TOLERANCE_DEG = 5.0
 SIGMAS = 3.0
-RESIDUAL_TOL = 0.0015
+RESIDUAL_RHO = 0.3
+"""A face whose tip centres miss its plane by more than this × the tip radius (RMS) is curved:
+1.5 mm for the 5 mm tip, three times the 0.5 mm noise and above a scanned box face's 0.4 mm."""
+SAGITTA_RHO = 0.2
+"""A face whose centres bend by more than this × the tip radius over the face is curved …"""
+SAGITTA_FRACTION = 0.03
+"""… and by more than this fraction of the face's extent (a cardboard bulge of 1 mm on a 10 cm
+face is 1 %; a cylinder's face seen by one sensor, 25° of arc, bends by 5.5 % of its width)."""
+MIN_SAGITTA_CONTACTS = 8
+"""Fewer contacts on a face do not determine its bending (a quadric has six unknowns)."""
 SMOOTH_DEG = 35.0
 MIN_SMOOTH_EDGES = 6
 REL_TOL = 0.06
@@ -115,7 +128,6 @@ EDGE_SIGMAS = 4.0
 lengths exceeds 4·√2·σ with a probability below 1 %."""
 POINT_TOL = 0.05
 HORIZONTAL_DEG = 10.0
-SPREAD_DEG = 10.0
 
 
 @dataclass(frozen=True)
@@ -239,8 +251,9 @@ def _caps(model: ObjectModel, name: str, horizontal_deg: float) -> tuple[set[int
     Found from the shape, not from z, so that a prism lying on a side is still a prism:
 
     1. a *base pair*: two parallel faces that every other face touches (along an edge or
-       at a vertex: a prism's or a frustum's ends); among several (a box) the pair holding
-       the table face;
+       at a vertex: a prism's or a frustum's ends); among several, those whose other edges
+       are parallel (a prism's ends, not a lying trapezoidal prism's two parallel sides),
+       and among those (a box) the pair holding the table face;
     2. else an *apex*: a vertex where all faces but one meet (a pyramid's); the base is the
        face not there (among several, a tetrahedron's, the table face);
     3. else the faces within ``horizontal_deg`` of −z (base) and +z (top).
@@ -266,7 +279,12 @@ def _caps(model: ObjectModel, name: str, horizontal_deg: float) -> tuple[set[int
             if np.delete(touches[f] & touches[g], [f, g]).all()
         ]
         if pairs:
-            f, g = next((q for q in pairs if base & set(q)), pairs[0])
+            # a prism's ends: the pair whose lateral edges are parallel (a lying trapezoidal
+            # prism also has a pair of parallel sides, one of them on the table); among
+            # several (a box) the pair holding the table face
+            parallel_ends = [q for q in pairs if _edges_parallel_apart_from(p, set(q))]
+            choice = parallel_ends or pairs
+            f, g = next((q for q in choice if base & set(q)), choice[0])
             return ({int(g)}, {int(f)}) if int(g) in base else ({int(f)}, {int(g)})
         if f_ >= 4:
             missing = [set(range(f_)) - set(fs) for fs in at if len(fs) == f_ - 1]
@@ -276,6 +294,23 @@ def _caps(model: ObjectModel, name: str, horizontal_deg: float) -> tuple[set[int
         return base, top
 
     return model.derived((__name__, "caps", horizontal_deg), compute)
+
+
+def _edges_parallel_apart_from(p: Polyhedron, cap: set[int]) -> bool:
+    """The edges on neither face of ``cap`` are parallel (within :data:`TOLERANCE_DEG`)."""
+    e = np.asarray(
+        [
+            e
+            for e, (f, g) in zip(p.edges, p.edge_faces, strict=True)
+            if f not in cap and g not in cap
+        ],
+        dtype=np.intp,
+    ).reshape(-1, 2)
+    if len(e) < 2:
+        return False
+    d = p.vertices[e[:, 1]] - p.vertices[e[:, 0]]
+    d /= np.linalg.norm(d, axis=1)[:, None]
+    return bool((np.abs(d @ d[0]) >= math.cos(math.radians(TOLERANCE_DEG))).all())
 
 
 def _sides(model: ObjectModel, name: str, horizontal_deg: float) -> list[int]:
@@ -383,18 +418,38 @@ def contact(model: ObjectModel) -> bool:
 def surface_curved(
     model: ObjectModel,
     *,
-    residual_tol: float = RESIDUAL_TOL,
+    residual_tol: float | None = None,
     smooth_deg: float = SMOOTH_DEG,
     min_smooth_edges: int = MIN_SMOOTH_EDGES,
-    spread_deg: float = SPREAD_DEG,
+    sagitta_tol: float | None = None,
 ) -> bool:
-    """The surface is curved: a face's contacts do not fit one plane, fired sensors more than
-    ``spread_deg`` apart (every contact on a plane fires the same sensors), or many smooth
-    edges (without a polyhedron: many faces with a neighbour direction that close)."""
-    if any(f.refined and f.residual > residual_tol for f in model.faces):
+    """The surface is curved: a face's tip centres miss its plane (RMS above ``residual_tol``)
+    or bend over the face (sagitta above ``sagitta_tol``, :func:`face_sagitta`), or the
+    polyhedron has many smooth edges (without a polyhedron: many faces with a neighbour
+    direction that close).
+
+    Both tolerances are relative by default: :data:`RESIDUAL_RHO` × the tip radius, and the
+    larger of :data:`SAGITTA_RHO` × the tip radius and :data:`SAGITTA_FRACTION` × the face's
+    extent; never below 3 (residual) or 4 (sagitta) σ of the record's declared noise. Which
+    sensors fired does not matter: a touch near a (rounded) edge, or on the rim of an
+    embossed letter, fires a neighbouring sensor on any real box."""
+    rho = model.record.tip_radius
+    noise = float(model.record.params.get("noise", 0.0))
+    res_tol = residual_tol if residual_tol is not None else max(RESIDUAL_RHO * rho, 3.0 * noise)
+    if any(f.refined and f.residual > res_tol for f in model.faces):
         return True
-    if _direction_spread_deg(model) > spread_deg:
-        return True
+    for f in model.contact_faces:
+        found = face_sagitta(model, f)
+        if found is None:
+            continue
+        sag, extent = found
+        tol = (
+            sagitta_tol
+            if sagitta_tol is not None
+            else max(SAGITTA_RHO * rho, SAGITTA_FRACTION * extent, 4.0 * noise)
+        )
+        if sag > tol:
+            return True
     p = model.polyhedron
     cos_smooth = math.cos(math.radians(smooth_deg))
     if p is None:
@@ -410,20 +465,44 @@ def surface_curved(
     return smooth >= min_smooth_edges
 
 
-def _direction_spread_deg(model: ObjectModel) -> float:
-    """Largest angle (degrees) between the contact directions of two contacts of one face."""
+def face_sagitta(model: ObjectModel, face: Face) -> tuple[float, float] | None:
+    """How far a face's tip centres bend away from a plane over the face: ``(sagitta,
+    extent)`` in metres, or None with fewer than :data:`MIN_SAGITTA_CONTACTS` contacts.
 
-    def compute() -> float:
-        worst = 1.0
-        contacts = model.record.contacts
-        for f in model.faces:
-            if len(f.contacts) >= 2:
-                d = np.asarray([contacts[i].direction for i in f.contacts], dtype=float)
-                d /= np.linalg.norm(d, axis=1)[:, None]
-                worst = min(worst, float((d @ d.T).min()))
-        return float(np.degrees(np.arccos(np.clip(worst, -1.0, 1.0))))
+    The centres' heights above the face's plane are fitted robustly
+    (``scipy.optimize.least_squares`` with the soft-L1 loss, so that a bump or a letter
+    under one contact does not bend the fit) by a quadric ``h = a·u² + b·uv + c·v² + d·u +
+    e·v + f`` in the face's own coordinates; the sagitta is the range, over the contacts, of
+    the quadric's departure from its best plane, and the extent is the contacts' largest
+    spread in the face. A cylinder's face bends by ``w²/8R`` over a width ``w``.
+    """
+    if len(face.contacts) < MIN_SAGITTA_CONTACTS or face.source != "contacts":
+        return None
 
-    return model.derived((__name__, "direction_spread"), compute)
+    def compute() -> tuple[float, float]:
+        c = np.asarray([model.record.contacts[i].centre for i in face.contacts], dtype=float)
+        n = face.normal_array
+        u = np.cross(n, [0.0, 0.0, 1.0] if abs(n[2]) < 0.9 else [1.0, 0.0, 0.0])
+        u /= np.linalg.norm(u)
+        v = np.cross(n, u)
+        centred = c - c.mean(axis=0)
+        x, y, h = centred @ u, centred @ v, centred @ n
+        extent = float(max(np.ptp(x), np.ptp(y)))
+        if extent <= 0:
+            return 0.0, 0.0
+        xs, ys = x / extent, y / extent  # well-conditioned unknowns
+        design = np.column_stack([xs * xs, xs * ys, ys * ys, xs, ys, np.ones_like(xs)])
+        start = np.linalg.lstsq(design, h, rcond=None)[0]
+        scale = max(float(model.record.params.get("noise", 0.0)), 1e-4)
+        from scipy.optimize import least_squares  # scipy only when a feature runs
+
+        fit = least_squares(lambda p: design @ p - h, start, loss="soft_l1", f_scale=scale)
+        quad = design[:, :3] @ fit.x[:3]
+        lin = design[:, 3:]
+        dev = quad - lin @ np.linalg.lstsq(lin, quad, rcond=None)[0]
+        return float(np.ptp(dev)), extent
+
+    return model.derived((__name__, "sagitta", face.contacts), compute)
 
 
 def _edge_cosines(model: ObjectModel, p: Polyhedron) -> FloatArray:
@@ -441,10 +520,10 @@ def _edge_cosines(model: ObjectModel, p: Polyhedron) -> FloatArray:
 def surface_plane(
     model: ObjectModel,
     *,
-    residual_tol: float = RESIDUAL_TOL,
+    residual_tol: float | None = None,
     smooth_deg: float = SMOOTH_DEG,
     min_smooth_edges: int = MIN_SMOOTH_EDGES,
-    spread_deg: float = SPREAD_DEG,
+    sagitta_tol: float | None = None,
 ) -> bool:
     """The surface is plane: touched somewhere, and not curved (see ``surface_curved``)."""
     return contact(model) and not surface_curved(
@@ -452,7 +531,7 @@ def surface_plane(
         residual_tol=residual_tol,
         smooth_deg=smooth_deg,
         min_smooth_edges=min_smooth_edges,
-        spread_deg=spread_deg,
+        sagitta_tol=sagitta_tol,
     )
 
 

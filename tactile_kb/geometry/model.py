@@ -45,7 +45,14 @@ from typing import Any, TypeVar, cast
 import numpy as np
 
 from tactile_kb.errors import GeometryError, OpenModelError, UsageError
-from tactile_kb.geometry.planes import DEFAULT_SPLIT_TOL, Face, contact_arrays, merge_plane_arrays
+from tactile_kb.geometry.planes import (
+    DEFAULT_SPLIT_TOL,
+    EDGE_ROUNDING,
+    Face,
+    contact_arrays,
+    edge_faces,
+    merge_plane_arrays,
+)
 from tactile_kb.geometry.polyhedron import (
     DEFAULT_MERGE_FRACTION,
     Polyhedron,
@@ -54,6 +61,7 @@ from tactile_kb.geometry.polyhedron import (
 )
 from tactile_kb.geometry.sections import LayerSection, distinct_planes, layer_sections
 from tactile_kb.record import ExplorationRecord
+from tactile_kb.types import FloatArray
 
 __all__ = [
     "ASSUMED_TOP_DEG",
@@ -175,6 +183,7 @@ def build_model(
     open_factor: float = 3.0,
     assume_top: bool = False,
     collapse_sigmas: float | None = COLLAPSE_SIGMAS,
+    edge_rounding: float | None = EDGE_ROUNDING,
 ) -> ObjectModel:
     """Build the :class:`ObjectModel` of ``record``.
 
@@ -206,6 +215,10 @@ def build_model(
         When ``record.noise`` is positive, polyhedron edges shorter than this many
         σ of their length (from the faces' uncertainties) are collapsed into a vertex
         (:func:`tactile_kb.geometry.polyhedron.collapse_short_edges`); None never collapses.
+    edge_rounding
+        Faces made of touches of the other faces' (sharp or rounded) edges are dropped
+        (:func:`tactile_kb.geometry.planes.edge_faces` with this ``rounding``); their contacts are
+        listed in ``options["edge_contacts"]``. None keeps every face.
 
     Returns
     -------
@@ -228,13 +241,16 @@ def build_model(
     tol = (
         support_tol if support_tol is not None else max(split_tol or DEFAULT_SPLIT_TOL, 6.0 * noise)
     )
-    points = _surface_points(arrays[0], record.tip_radius, faces)
-    normals = np.asarray([f.normal for f in faces], dtype=float).reshape(-1, 3)
-    offsets = np.asarray([f.offset for f in faces], dtype=float)
-    if len(points):
-        supporting = [bool(s) for s in (points @ normals.T - offsets).max(axis=0) <= tol]
-    else:
-        supporting = [True] * len(faces)
+    points, normals, offsets, supporting = _support(arrays[0], record.tip_radius, faces, tol)
+    edge_contacts: tuple[int, ...] = ()
+    if edge_rounding is not None and len(faces) >= 5:
+        drop = edge_faces(faces, arrays[0], record.tip_radius, noise=noise, rounding=edge_rounding)
+        if drop:
+            edge_contacts = tuple(sorted(i for k in drop for i in faces[k].contacts))
+            faces = tuple(f for k, f in enumerate(faces) if k not in drop)
+            points, normals, offsets, supporting = _support(
+                arrays[0], record.tip_radius, faces, tol
+            )
     options = {
         "cut_deg": cut_deg,
         "split_tol": split_tol,
@@ -245,6 +261,8 @@ def build_model(
         "open_factor": open_factor,
         "assume_top": assume_top,
         "collapse_sigmas": collapse_sigmas,
+        "edge_rounding": edge_rounding,
+        "edge_contacts": edge_contacts,
     }
     layers = layer_sections(record)
     kept = [i for i, s in enumerate(supporting) if s]
@@ -302,6 +320,21 @@ def build_model(
         return ObjectModel(record, faces, None, tuple(supporting), str(exc), [], layers, options)
     face_of = tuple(kept[p] for p in poly.plane_index)
     return ObjectModel(record, faces, poly, tuple(supporting), "", [], layers, options, face_of)
+
+
+def _support(
+    centres: FloatArray, rho: float, faces: tuple[Face, ...], tol: float
+) -> tuple[FloatArray, FloatArray, FloatArray, list[bool]]:
+    """Surface points, face normals and offsets, and which faces support the object (no
+    touched point more than ``tol`` outside their plane)."""
+    points = _surface_points(centres, rho, faces)
+    normals = np.asarray([f.normal for f in faces], dtype=float).reshape(-1, 3)
+    offsets = np.asarray([f.offset for f in faces], dtype=float)
+    if len(points):
+        supporting = [bool(s) for s in (points @ normals.T - offsets).max(axis=0) <= tol]
+    else:
+        supporting = [True] * len(faces)
+    return points, normals, offsets, supporting
 
 
 def _only_upwards(directions: list[tuple[float, float, float]]) -> bool:

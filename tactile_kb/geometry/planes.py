@@ -47,7 +47,8 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy.cluster.hierarchy import fcluster, linkage
 
-from tactile_kb.errors import UsageError
+from tactile_kb.errors import GeometryError, UsageError
+from tactile_kb.geometry.polyhedron import Polyhedron, polyhedron_from_planes
 from tactile_kb.record import Contact, ExplorationRecord
 from tactile_kb.types import FloatArray, Vec3
 
@@ -56,13 +57,18 @@ __all__ = [
     "DEFAULT_MERGE_DEG",
     "DEFAULT_SPAN",
     "DEFAULT_SPLIT_TOL",
+    "EDGE_MIN_WIDTH",
+    "EDGE_ROUNDING",
+    "EDGE_SIGMAS",
     "TABLE_TOL",
     "Face",
     "contact_arrays",
     "cut_angle",
+    "edge_faces",
     "fit_face",
     "merge_plane_arrays",
     "merge_planes",
+    "nearest_points",
 ]
 
 
@@ -83,6 +89,19 @@ DEFAULT_MERGE_DEG = 4.0
 TABLE_TOL = 0.001
 """Contacts whose plane is the table top (normal within 10° of +z, |offset| below this) are
 ignored."""
+
+EDGE_ROUNDING = 0.10
+"""Real edges are rounded with a radius up to this fraction of the narrower of the two faces
+they join (:func:`edge_faces`): contacts there tilt the sensor direction and make a narrow
+"face" that is not one."""
+
+EDGE_MIN_WIDTH = 4.0
+"""Edge faces are looked for only against faces at least this many tip radii wide: next to
+narrower faces (a small pyramid's, a thin cylinder's facets) the tip's own size, not a
+rounding, decides where it touches, and such narrow faces are faces of the object."""
+
+EDGE_SIGMAS = 2.0
+"""An edge face's penetration is allowed ``EDGE_SIGMAS`` × σ/√m of noise on top."""
 
 MAX_REFINE_DEG = 35.0
 """A fitted normal further than this from the contacts' sensor normal is not trusted."""
@@ -542,3 +561,156 @@ def _merge_coplanar(
                 changed = True
                 break
     return groups
+
+
+def nearest_points(
+    x: FloatArray, normals: FloatArray, offsets: FloatArray, *, iterations: int = 60
+) -> FloatArray:
+    """The nearest point of the convex set ``normals · q ≤ offsets`` to each row of ``x``.
+
+    A point outside one half-space only is projected onto its plane; the others by Dykstra's
+    alternating projections over the half-spaces they are outside of or near.
+    """
+    x = np.asarray(x, dtype=float).reshape(-1, 3)
+    n = np.asarray(normals, dtype=float).reshape(-1, 3)
+    d = np.asarray(offsets, dtype=float).reshape(-1)
+    if len(n) == 0 or len(x) == 0:
+        return x.copy()
+    over = x @ n.T - d
+    worst = over.argmax(axis=1)
+    q: FloatArray = x - np.maximum(over[np.arange(len(x)), worst], 0.0)[:, None] * n[worst]
+    hard = np.flatnonzero((q @ n.T - d).max(axis=1) > 1e-12)
+    if len(hard) == 0:
+        return q
+    y = x[hard].copy()
+    corr = np.zeros((len(n), *y.shape))
+    for _ in range(iterations):
+        for i in range(len(n)):
+            z = y + corr[i]
+            y = z - np.maximum(z @ n[i] - d[i], 0.0)[:, None] * n[i][None, :]
+            corr[i] = z - y
+    q[hard] = y
+    return q
+
+
+def edge_faces(
+    faces: Sequence[Face],
+    centres: FloatArray,
+    rho: float,
+    *,
+    noise: float = 0.0,
+    rounding: float = EDGE_ROUNDING,
+    max_faces: int = 40,
+) -> list[int]:
+    """Indices of the contact faces that are touches of the other faces' edges, not faces.
+
+    A tip touching an edge (sharp, or rounded as real edges are) sees a direction between
+    the two faces' and its contacts form a narrow face of their own. Such a face adds nothing
+    to the envelope of the others: its tip centres lie (about) ρ outside the polyhedron the
+    other faces bound, while a face of the object lies where the others' polyhedron would
+    overshoot it. A face is an edge face when the largest *penetration* of its tip centres into
+    the others' polyhedron grown by ρ is at most ``rounding`` × the width of the widest face it
+    lies against (the largest rounding of such an edge penetrates by about its radius) plus
+    :data:`EDGE_SIGMAS` × ``noise``/√m, and that face is at least
+    :data:`EDGE_MIN_WIDTH` tip radii wide. Only faces whose centres span no plane of their own
+    (one contact, or contacts along a line) and no more touched than the faces they lie
+    against (an edge is touched in passing, a face is explored) are candidates; they are
+    removed one at a time, those with fewest contacts first, while the others still close; at most ``max_faces`` faces are examined (a curved
+    object's many narrow faces are left to the curvature tests).
+
+    Parameters
+    ----------
+    faces
+        The faces from :func:`merge_planes` (the table included).
+    centres
+        (n, 3) tip centres of all contacts of the record (faces index them).
+    rho
+        The tip radius.
+    noise
+        σ of the contact positions (m).
+    rounding
+        See :data:`EDGE_ROUNDING`.
+    """
+    kept = list(range(len(faces)))
+    removed: list[int] = []
+    if len(faces) > max_faces:
+        return removed
+    normals = np.asarray([f.normal for f in faces], dtype=float).reshape(-1, 3)
+    offsets = np.asarray([f.offset for f in faces], dtype=float)
+    pts = centres[[i for f in faces for i in f.contacts]] if len(centres) else centres
+    bound = (pts.mean(axis=0), 3.0 * float(np.ptp(pts, axis=0).max()) + rho)
+    while True:
+        best: int | None = None
+        try:
+            full = polyhedron_from_planes(normals[kept], offsets[kept], bound=bound)
+        except GeometryError:
+            return sorted(removed)
+        # each face's width: in the polyhedron of the faces that span planes of their own
+        # (and the table) when they close, where narrow edge faces do not cut them short;
+        # else in the model as it stands
+        widths = {kept[int(j)]: _width(full, fi) for fi, j in enumerate(full.plane_index)}
+        adjacent: dict[int, set[int]] = {}
+        for a, b in full.edge_faces:
+            fa, fb = kept[int(full.plane_index[a])], kept[int(full.plane_index[b])]
+            adjacent.setdefault(fa, set()).add(fb)
+            adjacent.setdefault(fb, set()).add(fa)
+        core = [k for k in kept if faces[k].refined or faces[k].source != "contacts"]
+        if len(core) < len(kept):
+            try:
+                solid = polyhedron_from_planes(normals[core], offsets[core], bound=bound)
+                widths.update(
+                    {core[int(j)]: _width(solid, fi) for fi, j in enumerate(solid.plane_index)}
+                )
+            except GeometryError:
+                pass
+        # the likeliest edge faces first: not spanning a plane of their own, few contacts
+        for k in sorted(kept, key=lambda k: (faces[k].refined, faces[k].n_contacts)):
+            f = faces[k]
+            if f.source != "contacts" or not f.contacts or f.refined:
+                continue  # a face whose centres span a plane of its own is a face
+            if max((widths.get(j, 0.0) for j in adjacent.get(k, ())), default=1.0) < (
+                EDGE_MIN_WIDTH * rho
+            ):
+                continue  # only narrow faces around (a curved object): cheap early answer
+            others = [j for j in kept if j != k]
+            try:
+                poly = polyhedron_from_planes(normals[others], offsets[others], bound=bound)
+            except GeometryError:
+                continue  # without it the others do not close: a face
+            c = centres[list(f.contacts)]
+            grown = poly.offsets + rho
+            q = nearest_points(c, poly.normals, grown)
+            outside = c @ poly.normals.T - grown
+            # inside the grown polyhedron: the distance to its nearest plane; outside: minus
+            # the distance to it
+            penetration = np.where(
+                outside.max(axis=1) < 0,
+                -outside.max(axis=1),
+                -np.linalg.norm(c - q, axis=1),
+            )
+            near = np.abs(q @ poly.normals.T - grown) <= 0.5 * rho + 1e-9
+            against = [others[int(poly.plane_index[fi])] for fi in np.flatnonzero(near.any(0))]
+            # the widest of them: next to it may lie another edge face, not yet removed
+            width = max((widths.get(j, 0.0) for j in against), default=0.0)
+            if width < EDGE_MIN_WIDTH * rho:
+                continue  # against narrow faces (a small or curved object) a face stays
+            if any(faces[j].n_contacts < f.n_contacts for j in against if faces[j].contacts):
+                continue  # touched more than a face it lies against: explored as a face
+            allowed = rounding * width + EDGE_SIGMAS * noise / math.sqrt(len(c))
+            if float(penetration.max()) <= allowed:
+                best = k
+                break
+        if best is None:
+            return sorted(removed)
+        kept.remove(best)
+        removed.append(best)
+
+
+def _width(poly: Polyhedron, face: int) -> float:
+    """The in-plane width of a polyhedron face: its extent across its longest direction."""
+    v = poly.vertices[list(poly.faces[face])]
+    if len(v) < 3:
+        return 0.0
+    centred = v - v.mean(axis=0)
+    _, _, vt = np.linalg.svd(centred, full_matrices=False)
+    return float(np.ptp(centred @ vt[1]))

@@ -37,10 +37,11 @@ from __future__ import annotations
 
 import abc
 import math
+from collections.abc import Callable
 from typing import TYPE_CHECKING, Any, Literal, Protocol, runtime_checkable
 
 from tactile_kb.errors import PluginError, UsageError
-from tactile_kb.objects import ObjectLike, check_thickness, load_object, object_name
+from tactile_kb.objects import NOTES_KEY, ObjectLike, check_thickness, load_object, object_name
 from tactile_kb.plugins import Registry
 from tactile_kb.record import ExplorationRecord
 from tactile_kb.touch.finger import Finger, layout_warnings, load_finger
@@ -49,7 +50,7 @@ from tactile_kb.touch.sensors import FaultySensors, check_fault_rates
 if TYPE_CHECKING:
     import trimesh
 
-    from tactile_kb.touch.servo import Controller, ServoParams
+    from tactile_kb.touch.servo import Completer, Controller, ServoParams
     from tactile_kb.touch.world import World
 
 __all__ = [
@@ -208,16 +209,26 @@ class WorldExplorer(abc.ABC):
     world: the session wraps it in :class:`~tactile_kb.touch.sensors.FaultySensors`, which adds
     the encoder noise (``noise``, given per exploration) and the sensor faults (``dropout``,
     ``false_fire``, given here), the same in every world. ``params`` are the servo parameters
-    (:class:`tactile_kb.touch.servo.ServoParams`, default when ``None``); like a scikit-learn
-    estimator, ``__init__`` only stores them.
+    (:class:`tactile_kb.touch.servo.ServoParams`, default when ``None``). ``completer`` makes
+    the :class:`~tactile_kb.touch.servo.Completer` of one exploration, which asks for probes
+    after contour following (the model-driven completion,
+    :class:`tactile_kb.completion.ModelCompleter`, which :func:`tactile_kb.classify` and the
+    command line attach); without one the finger follows the paper's servo rules alone. Like a
+    scikit-learn estimator, ``__init__`` only stores its parameters.
     """
 
     name: str = ""
 
     def __init__(
-        self, params: ServoParams | None = None, *, dropout: float = 0.0, false_fire: float = 0.0
+        self,
+        params: ServoParams | None = None,
+        *,
+        completer: Callable[[], Completer] | None = None,
+        dropout: float = 0.0,
+        false_fire: float = 0.0,
     ) -> None:
         self.params = params
+        self.completer = completer
         self.dropout = dropout
         self.false_fire = false_fire
 
@@ -276,7 +287,9 @@ class WorldExplorer(abc.ABC):
             object_name=object_name(obj),
             seed=seed,
             noise=float(noise),
+            completer=None if self.completer is None else self.completer(),
         )
+        controller.notes.extend(str(n) for n in mesh.metadata.get(NOTES_KEY, []))
         controller.notes.extend(notes)
         return ServoSession(controller)
 

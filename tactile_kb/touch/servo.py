@@ -55,7 +55,7 @@ import itertools
 import math
 from collections.abc import Iterator, Sequence
 from dataclasses import asdict, dataclass, field, replace
-from typing import Literal
+from typing import Literal, Protocol
 
 import numpy as np
 
@@ -64,7 +64,7 @@ from tactile_kb.record import Contact, ExplorationRecord, Layer
 from tactile_kb.touch.world import Motion, Vec3, World
 from tactile_kb.types import FloatArray
 
-__all__ = ["Controller", "Mark", "ServoParams"]
+__all__ = ["Completer", "Controller", "Ending", "Mark", "Probe", "ServoParams"]
 
 Mark = Literal["contact", "layer", "complete"]
 """What :meth:`Controller.run` yields: the first touch, a finished layer, the end."""
@@ -74,6 +74,16 @@ _Z = np.array([0.0, 0.0, 1.0])
 
 CURVED_RUN = 3
 """Edge touches in a row (each rolling off within ``edge_slide``) that mean a curved surface."""
+
+RIDE_STEP = 0.8
+"""How far (in tip radii) a ride over an irregularity steps on before pressing back: far enough
+that the press, ``bump`` deeper than the surface, misses a real convex edge (√(2ρb − b²) for a
+right angle and a bump b ≤ ρ / 4: 0.66 ρ)."""
+
+RIDE_DEG = 20.0
+"""Degrees: a touch while riding over an irregularity (:meth:`Controller._ride`) whose sensors
+point this close to the surface's normal is the surface followed (a real face turns further at
+an edge: 30° and more between the faces of a 12-sided prism)."""
 
 
 @dataclass(frozen=True)
@@ -116,6 +126,14 @@ class ServoParams:
         middle (a rectangle of slides, so that the top's tip centres span it).
     approach_margin
         Free space kept outside the hint box when approaching.
+    comply
+        Ride over small irregularities of a surface slid along, as a finger under force
+        control does (see :meth:`Controller._ride`): a slide stopped without a sensor change
+        backs off, steps over and presses on again; a slide that loses the surface presses
+        back onto it. Off: the paper's rules alone (a blocked slide ends the contour).
+    bump
+        The largest irregularity (bump, ripple, relief) ridden over, metres; ``None``:
+        ρ / 4 (1.25 mm for the 5 mm tip).
     max_motions
         Hard budget of motions for a whole exploration.
     max_layer_motions
@@ -135,8 +153,10 @@ class ServoParams:
     top: bool = True
     top_spread: float = 0.45
     approach_margin: float = 0.01
-    max_motions: int = 3000
-    max_layer_motions: int = 400
+    comply: bool = True
+    bump: float | None = None
+    max_motions: int = 6000
+    max_layer_motions: int = 1000
     max_layers: int = 40
 
     def __post_init__(self) -> None:
@@ -144,7 +164,7 @@ class ServoParams:
             v = getattr(self, name)
             if not (math.isfinite(v) and v > 0):
                 raise UsageError(f"servo parameter {name} must be > 0 metres, got {v}")
-        for name in ("z_step", "z_first", "spacing", "edge_slide"):
+        for name in ("z_step", "z_first", "spacing", "edge_slide", "bump"):
             v = getattr(self, name)
             if v is not None and not (math.isfinite(v) and v > 0):
                 raise UsageError(f"servo parameter {name} must be > 0 metres or None, got {v}")
@@ -159,6 +179,58 @@ class ServoParams:
 
 class _Budget(Exception):
     pass
+
+
+@dataclass(frozen=True)
+class Probe:
+    """A touch asked for from above the controller (plain values, no geometry in the servo).
+
+    The finger goes round the object (up over the hint box, across, down) to a point
+    ``target + normal × (reach + clearance)`` outside it and approaches along ``−normal``
+    until a sensor closes, then slides a little along the surface it touched.
+
+    Attributes
+    ----------
+    target
+        Where the surface is expected (metres; the tip centre's goal, offset by ρ already).
+    normal
+        Unit outward direction to approach from.
+    reach
+        How far beyond ``target`` the approach may go looking for the surface (metres).
+    reason
+        What the probe is for, e.g. ``"open towards +y"`` (for the record's notes).
+    """
+
+    target: Vec3
+    normal: Vec3
+    reach: float
+    reason: str
+    middle: bool = False
+    """Aim at the middle of the hint box (the visual estimate of where the object is) rather
+    than at ``target``'s horizontal position: for a side never touched, where the touched
+    points say little about where the object's middle is."""
+
+
+@dataclass(frozen=True)
+class Ending:
+    """How a model-driven completion ended: ``"closed"`` (the envelope is closed and every face
+    has tip centres at two heights), ``"budget"`` (touches or path ran out) or ``"unreachable"``
+    (what stayed open cannot be reached); ``message`` says it in one line, ``unreachable``
+    names what stayed open."""
+
+    status: Literal["closed", "budget", "unreachable"]
+    message: str
+    unreachable: tuple[str, ...] = ()
+
+
+class Completer(Protocol):
+    """What drives the completion after contour following (see :mod:`tactile_kb.completion`):
+    given the record so far and the outcome of the previous probe (None at the start), the next
+    :class:`Probe`, or the :class:`Ending`."""
+
+    def next_probe(
+        self, record: ExplorationRecord, last: tuple[Probe, bool] | None
+    ) -> Probe | Ending: ...
 
 
 @dataclass
@@ -190,6 +262,10 @@ class Controller:
         The servo parameters.
     explorer, object_name, seed, noise, extra_params
         Copied into the record (``noise``: σ of the encoder noise of the world's sensors).
+    completer
+        Drives the completion after the layers, the probes and the tops: probes asked for by
+        a model of what was touched (:mod:`tactile_kb.completion`) until it says the model is
+        closed or the budget is spent. None: no completion (the paper's exploration alone).
     """
 
     def __init__(
@@ -202,8 +278,11 @@ class Controller:
         seed: int | None = None,
         noise: float = 0.0,
         extra_params: dict[str, float] | None = None,
+        completer: Completer | None = None,
     ) -> None:
         self.world = world
+        self.completer = completer
+        self.ending: Ending | None = None
         self.params = params or ServoParams()
         self.explorer = explorer
         self.object_name = object_name
@@ -220,6 +299,7 @@ class Controller:
         size = hint.size
         self.spacing = self.params.spacing or max(0.0015, math.hypot(size[0], size[1]) / 30.0)
         self.edge_slide = self.params.edge_slide or 0.5 * self.rho
+        self.bump = self.params.bump or 0.25 * self.rho
         self.reach = float(
             math.hypot(size[0], size[1]) + 2 * (self.rho + self.params.approach_margin)
         )
@@ -229,10 +309,12 @@ class Controller:
         self.notes: list[str] = []
         self.motions = 0
         self.rereads = 0  # touches recovered by reading the sensors again at rest
+        self.rides = 0  # irregularities ridden over while sliding
         self._layer_motions = 0
         self._phase = "first-contact"
         self._layer: int | None = None
         self._last_pos: Vec3 | None = None
+        self._last_move: Motion | None = None
         self._surfaces: list[tuple[float, _Segment]] = []  # (layer z, surface slid along)
         self._heights: list[float] = []  # the z of every layer
 
@@ -250,6 +332,7 @@ class Controller:
             self.path.append(m.start)
         self.path.append(m.measured)
         self._last_pos = m.end
+        self._last_move = m
         if self.motions >= self.params.max_motions:
             raise _Budget(f"motion budget of {self.params.max_motions} exhausted")
         return m
@@ -347,6 +430,7 @@ class Controller:
             z_first=self.z_first,
             spacing=self.spacing,
             edge_slide=self.edge_slide,
+            bump=self.bump,
         )
         params.update(self.extra_params)
         return ExplorationRecord(
@@ -368,7 +452,10 @@ class Controller:
                 [f"{self.rereads} lost sensor signal(s) recovered by reading the sensors at rest"]
                 if self.rereads
                 else []
-            ),
+            )
+            + ([f"{self.rides} surface irregularities ridden over"] if self.rides else []),
+            ending=self.ending.status if self.ending else "",
+            unreachable=list(self.ending.unreachable) if self.ending else [],
         )
 
     # the exploration ---------------------------------------------------------------------------
@@ -395,7 +482,7 @@ class Controller:
                 last = above or index + 1 >= self.params.max_layers
                 closed, pos, follow = self._contour(pos, follow, last=last)
                 layer_path = self.path[start_path - 1 if start_path else 0 :]
-                self._finish_layer(index, z, layer_path, start_contacts, closed)
+                self._finish_layer(index, z, layer_path, closed)
                 layer_contacts = [c for c in self.contacts[start_contacts:] if c.layer == index]
                 self._heights.append(z)
                 if index and self._narrow(layer_contacts, top_contacts):
@@ -406,7 +493,6 @@ class Controller:
                     )
                     self.contacts = [c for c in self.contacts if c.layer != index]
                     self._surfaces = [(h, g) for h, g in self._surfaces if abs(h - z) > 1e-12]
-                    self.layers[-1] = self.layers[-1].model_copy(update={"contour": []})
                     yield "layer"
                     break
                 if closed or not top_contacts:
@@ -427,13 +513,154 @@ class Controller:
             self._layer = None
             if self.params.probe:
                 self._phase = "probe"
-                self._probe(_centre(top_contacts))
+                _SideProbes(self).run(_centre(top_contacts))
             if self.params.top:
                 self._phase = "top"
-                self._top(top_contacts)
+                _TopPhase(self).run(top_contacts)
         except _Budget as exc:
             self._note(str(exc))
+        if self.completer is not None:
+            self._phase = "complete"
+            self._complete(self.completer)
         yield "complete"
+
+    # completion driven from above ---------------------------------------------------------------
+    def _complete(self, completer: Completer) -> None:
+        """Carry out the probes ``completer`` asks for until it returns an :class:`Ending`."""
+        last: tuple[Probe, bool] | None = None
+        if self.motions >= self.params.max_motions:
+            text = f"motion budget of {self.params.max_motions} exhausted before the completion"
+            self.ending = Ending("budget", text, (f"unknown ({text})",))
+            return
+        while True:
+            try:
+                nxt = completer.next_probe(self.record(complete=False), last)
+                if isinstance(nxt, Ending):
+                    self.ending = nxt
+                    self._note(nxt.message)
+                    return
+                last = (nxt, self.probe(nxt))
+            except _Budget as exc:
+                text = f"{exc} ({self.touches} touches): the model was not completed"
+                self.ending = Ending("budget", text, (f"unknown ({exc})",))
+                self._note(text)
+                return
+
+    @property
+    def touches(self) -> int:
+        """Touches so far (sensor OFF→ON events kept in the record)."""
+        return sum(1 for c in self.contacts if c.kind == "touch")
+
+    def probe(self, p: Probe) -> bool:
+        """Touch the surface asked for by ``p``; whether a sensor facing it closed.
+
+        The way there goes up over the hint box, across to above the start of the approach,
+        and down to it (each leg in free space: anything met on the way ends the probe). The
+        touch is followed by a short slide each way along the surface (more tip centres on it).
+        """
+        normal = _unit(np.asarray(p.normal, dtype=float))
+        if self.finger.nearest(_v3(-normal)) is None:
+            self._note(f"no sensor of finger {self.finger.name!r} faces a probe ({p.reason})")
+            return False
+        target = np.asarray(p.target, dtype=float)
+        hint = self.world.hint
+        if p.middle:
+            target[:2] = np.asarray(hint.centre, dtype=float)[:2]
+        lo, hi = np.asarray(hint.lo, dtype=float), np.asarray(hint.hi, dtype=float)
+        clear = self.rho + self.params.approach_margin
+        # along the normal out of the hint box: the approach starts outside the object
+        out = min(
+            (float(hi[k]) - float(target[k])) / normal[k]
+            if normal[k] > 1e-9
+            else (float(lo[k]) - float(target[k])) / normal[k]
+            if normal[k] < -1e-9
+            else math.inf
+            for k in range(3)
+        )
+        out = max(out, 0.0) if math.isfinite(out) else 0.0
+        far = target + normal * (out + clear)
+        far[2] = max(float(far[2]), float(self.world.workspace.lo[2]))
+        if not self.world.workspace.contains(_v3(far)):
+            self._note(
+                f"a probe ({p.reason}) would start outside the workspace at {_fmt(_v3(far))}"
+            )
+            return False
+        if not self._go_round(far, p.reason):
+            return False
+        here = np.asarray(self._last_pos, dtype=float)
+        m = self._move(here, -normal, float(np.linalg.norm(far - target)) + p.reach)
+        if m.event != "touch":
+            self._note(f"a probe ({p.reason}) found nothing ({m.event})")
+            return False
+        f = self._follow(m.closed)
+        self._record(m, f, "touch")
+        if float(f.r0 @ -normal) < math.cos(math.radians(60.0)):
+            self._note(
+                f"a probe ({p.reason}) touched at {_fmt(m.end)} a surface facing "
+                f"{_fmt(_v3(-f.r0))}, not the approach"
+            )
+            return False
+        pos = np.asarray(m.end, dtype=float)
+        t = self._tangent(f)
+        if t is None:  # a top: slide along any horizontal direction
+            t = _unit(np.cross(normal, np.array([1.0, 0.0, 0.0])))
+            if float(np.linalg.norm(t)) < 0.5:
+                t = np.array([0.0, 1.0, 0.0])
+            t = _unit(np.array([t[0], t[1], 0.0]))
+        for direction in (t, -t):
+            sm, travelled = self._slide_sampled(pos, direction, f, 2.0 * self.spacing)
+            if travelled > 1e-6 and sm.event in ("none", "release", "blocked"):
+                self._record(sm, f, "slide")
+            pos = np.asarray(sm.end, dtype=float)
+            if sm.event not in ("none", "release", "blocked") or f.sensor not in sm.fired:
+                break
+        return True
+
+    def _go_round(self, goal: FloatArray, why: str) -> bool:
+        """Move from where the finger is to ``goal`` over the top of the hint box."""
+        hint = self.world.hint
+        safe = float(hint.hi[2]) + self.rho + self.params.approach_margin
+        here = np.asarray(self._last_pos, dtype=float)
+        last = self._last_move
+        near = (
+            bool(self.contacts)
+            and float(np.linalg.norm(np.asarray(self.contacts[-1].centre) - here)) < 3.0 * self.rho
+        )
+        if near or (last is not None and last.event == "blocked"):
+            # leave the surface first: away from the last contact (or back the way the last
+            # motion came, when no sensor felt it)
+            back = (
+                -np.asarray(self.contacts[-1].direction, dtype=float)
+                if near
+                else -np.asarray(last.direction if last else (0.0, 0.0, -1.0), dtype=float)
+            )
+            for _ in range(2):  # a bulge in the way: once more
+                m = self._move_on(here, back, self.rho)
+                here = np.asarray(m.end, dtype=float)
+                if m.event in ("none", "release"):
+                    break
+                back = _unit(back + _Z)
+        if self.world.sense(_v3(here)):  # still on a surface: away from the middle
+            centre = np.asarray(hint.centre, dtype=float)
+            away = _unit(np.array([here[0] - centre[0], here[1] - centre[1], 0.0]))
+            if float(np.linalg.norm(away)) > 0.5:
+                m = self._move_on(here, away, self.rho)
+                here = np.asarray(m.end, dtype=float)
+        for waypoint in (
+            np.array([here[0], here[1], max(safe, float(here[2]))]),
+            np.array([goal[0], goal[1], max(safe, float(goal[2]))]),
+            goal,
+        ):
+            d = waypoint - here
+            length = float(np.linalg.norm(d))
+            if length < 1e-9:
+                continue
+            m = self._move_on(here, d / length, length)
+            here = np.asarray(m.end, dtype=float)
+            if m.event not in ("none", "release"):
+                self._note(f"the way to a probe ({why}) is blocked at {_fmt(m.end)} ({m.event})")
+                return False
+        return True
 
     def _first_contact(self) -> tuple[FloatArray, _Follow]:
         """Approach the object horizontally (+x) on lines across the hint until a sensor closes."""
@@ -476,16 +703,101 @@ class Controller:
         self, pos: FloatArray, direction: FloatArray, f: _Follow, length: float
     ) -> tuple[Motion, float]:
         """Slide up to ``length`` along the surface under ``f``, recording a ``"slide"`` contact
-        every :attr:`spacing`; the last motion (not recorded) and the distance travelled."""
+        every :attr:`spacing`; the last motion (not recorded) and the distance travelled.
+
+        With ``comply`` on, a slide that stops before the surface ends (a bump blocks it, or
+        the surface recedes a little) rides over the irregularity (:meth:`_ride`) and goes on.
+        """
         travelled = 0.0
+        start = np.asarray(pos, dtype=float)
         while True:
             piece = min(self.spacing, length - travelled)
             m = self._slide(pos, direction, piece, f.sensor)
             travelled += m.distance
+            if (
+                self.params.comply
+                and travelled + RIDE_STEP * self.rho < length
+                and (m.event == "blocked" or (m.event == "release" and f.sensor not in m.fired))
+            ):
+                ahead = _chord(start, np.asarray(m.end, dtype=float), self.rho, m.direction)
+                ridden = self._ride(m, f, ahead)
+                if ridden is not None:
+                    pos, hop = ridden
+                    travelled += hop
+                    self.rides += 1
+                    continue
             if m.event != "none" or m.distance < piece - 1e-9 or travelled >= length - 1e-9:
                 return m, travelled
             self._record(m, f, "slide")
             pos = np.asarray(m.end, dtype=float)
+
+    def _ride(self, m: Motion, f: _Follow, ahead: FloatArray) -> tuple[FloatArray, float] | None:
+        """Ride over an irregularity that stopped the slide ``m`` of ``f``'s surface.
+
+        The compliance of a finger under force control, made of the servo logic's own
+        motions: back off the surface by :attr:`bump`, step on by :data:`RIDE_STEP` ρ along
+        ``ahead`` (the slide's mean direction so far), and press back towards the surface
+        (along r0, squared to ``ahead``) to :attr:`bump` deeper than where the slide ran. A bump
+        higher than that is tried once more, lifting twice as far. The surface is regained when the followed sensor fires again: that
+        contact is recorded as a ``"slide"`` contact (the finger never left the surface it
+        follows) and the slide goes on from there.
+
+        The step is long enough that at a real convex edge the press misses the edge or meets
+        the next face with sensors turned further than :data:`RIDE_DEG`, so a real edge still ends the slide as the paper's rules say: the finger goes
+        back to where the slide stopped and None is returned (the caller then runs the search
+        cycle, or ends the contour).
+        """
+        r0 = _unit(f.r0)
+        horizontal = float(np.hypot(r0[0], r0[1]))
+        if horizontal > 1e-6:  # press square to the slide's mean direction, at r0's elevation
+            r0 = _unit(np.cross(_Z, ahead) * horizontal + np.array([0.0, 0.0, r0[2]]))
+        regained: Motion | None = None
+        for lift in (self.bump, 2.0 * self.bump):  # a bump higher than expected: lift more
+            pos = np.asarray(m.end, dtype=float)
+            legs: list[tuple[FloatArray, float]] = []
+            back = self._move_on(pos, -r0, lift)
+            legs.append((r0, back.distance))
+            pos = np.asarray(back.end, dtype=float)
+            if back.event in ("none", "release"):
+                step = self._move(pos, ahead, RIDE_STEP * self.rho)
+                legs.append((-ahead, step.distance))
+                pos = np.asarray(step.end, dtype=float)
+                if step.event == "touch" and step.distance > 0.25 * self.rho:
+                    regained = step
+                elif step.event == "none":
+                    press = self._move(pos, r0, lift + self.bump)
+                    legs.append((-r0, press.distance))
+                    if press.event == "touch":
+                        regained = press
+                    pos = np.asarray(press.end, dtype=float)
+            if regained is not None and not self._same_surface(regained, f, r0):
+                regained = None
+            if regained is not None:
+                break
+            # not regained: back to where the slide stopped, for the paper's rules from there
+            for direction, length in reversed(legs):
+                if length > 1e-12:
+                    pos = np.asarray(self._move(pos, direction, length).end, dtype=float)
+            if m.event == "release":  # the surface fell away: a real edge
+                return None
+        if regained is None:
+            return None
+        if f.sensor not in regained.fired:  # the surface turned a little: follow what closed
+            nf = self._follow(regained.closed)
+            f.sensor, f.group, f.r0 = nf.sensor, nf.group, nf.r0
+        self._record(regained, f, "slide")
+        end = np.asarray(regained.end, dtype=float)
+        return end, max(0.0, float((end - np.asarray(m.end, dtype=float)) @ ahead))
+
+    def _same_surface(self, m: Motion, f: _Follow, press: FloatArray) -> bool:
+        """Whether a touch while riding is the followed surface again: the followed sensor
+        fired, or the sensors that closed point within :data:`RIDE_DEG` of the press."""
+        if f.sensor in m.fired:
+            return True
+        if not m.closed:
+            return False
+        mean = _unit(self._dirs[list(m.closed)].sum(axis=0))
+        return float(mean @ press) >= math.cos(math.radians(RIDE_DEG))
 
     def _contour(
         self, pos: FloatArray, f: _Follow, *, last: bool = False
@@ -554,7 +866,7 @@ class Controller:
                 if segs and segs[-1].group == frozenset(f.group) and since > travelled:
                     segs[-1].length += travelled  # the same surface, after another sensor opened
                 else:
-                    direction = np.asarray(m.direction, dtype=float)
+                    direction = _chord(start, pos, self.rho, m.direction)
                     segs.append(
                         _Segment(frozenset(f.group), start, direction, travelled, f.r0.copy())
                     )
@@ -766,13 +1078,27 @@ class Controller:
         size, size_below = _radius(contacts), _radius(below)
         return size - self.rho < 2.0 * self.rho and size < 0.6 * size_below
 
-    def _probe(self, centre: FloatArray | None) -> None:
+    def _finish_layer(self, index: int, z: float, path: list[Vec3], closed: bool) -> None:
+        # the controller computes no geometry: the model traces contours from the contacts
+        self.layers.append(Layer(index=index, z=float(z), path=list(path), closed=closed))
+
+
+class _SideProbes:
+    """The probe phase: every surface that only one layer slid along (narrow there, or skipped
+    by a search cycle) is touched once more at another height, approached along its normal
+    from outside the object, so that every face has tip centres at two heights."""
+
+    def __init__(self, controller: Controller) -> None:
+        self._c = controller
+
+    def run(self, centre: FloatArray | None) -> None:
         """Touch every surface slid along in one layer only once more, at another height."""
-        heights = sorted(set(self._heights))
+        c = self._c
+        heights = sorted(set(c._heights))
         if len(heights) < 2 or centre is None:
             return
         seen: dict[frozenset[int], list[tuple[float, _Segment]]] = {}
-        for z, seg in self._surfaces:
+        for z, seg in c._surfaces:
             seen.setdefault(seg.group, []).append((z, seg))
         for found in seen.values():
             zs = {z for z, _ in found}
@@ -793,10 +1119,10 @@ class Controller:
             aim = seg.start + (0.7 * along.min() + 0.3 * along.max()) * seg.direction
             z1 = min((z for z in heights if z != z0), key=lambda z: abs(z - z0))
             z = z0 + 0.6 * (z1 - z0)
-            if not self._probe_one(aim, _unit(out), z, centre, seg.group):
+            if not self._one(aim, _unit(out), z, centre, seg.group):
                 return
 
-    def _probe_one(
+    def _one(
         self, aim: FloatArray, out: FloatArray, z: float, centre: FloatArray, group: frozenset[int]
     ) -> bool:
         """Approach a surface at height ``z`` along its outward normal ``out``, from outside the
@@ -806,11 +1132,12 @@ class Controller:
         The touch is kept when it fired the surface's own sensors (``group``), even if the
         surface is too narrow there to slide far; otherwise it must slide like a surface.
         """
-        hint = self.world.hint
+        c = self._c
+        hint = c.world.hint
         lo, hi = np.asarray(hint.lo, dtype=float), np.asarray(hint.hi, dtype=float)
-        clear = self.rho + self.params.approach_margin
+        clear = c.rho + c.params.approach_margin
         # the way out: away from the middle of the object, then up over it, then down outside it
-        here = np.asarray(self._last_pos, dtype=float)
+        here = np.asarray(c._last_pos, dtype=float)
         away = _unit(np.array([here[0] - centre[0], here[1] - centre[1], 0.0]))
         target = np.array([aim[0], aim[1], z])
         far = target + out * (_exit(target, out, lo, hi) + clear)
@@ -819,10 +1146,10 @@ class Controller:
         if float(np.linalg.norm(away)) > 0.5:
             legs.append((away, _exit(here, away, lo, hi) + clear))
         for leg_dir, length in legs:
-            m = self._move(here, leg_dir, length)
+            m = c._move(here, leg_dir, length)
             here = np.asarray(m.end, dtype=float)
             if m.event in ("touch", "blocked"):
-                self._note(f"the way to a probe is blocked at {_fmt(m.end)}")
+                c._note(f"the way to a probe is blocked at {_fmt(m.end)}")
                 return False
         for goal in (
             np.array([here[0], here[1], safe]),
@@ -833,65 +1160,67 @@ class Controller:
             length = float(np.linalg.norm(d))
             if length < 1e-9:
                 continue
-            m = self._move_on(here, d / length, length)
+            m = c._move_on(here, d / length, length)
             here = np.asarray(m.end, dtype=float)
             if m.event not in ("none", "release"):
-                self._note(f"the way to a probe is blocked at {_fmt(m.end)} ({m.event})")
+                c._note(f"the way to a probe is blocked at {_fmt(m.end)} ({m.event})")
                 return False
-        m = self._move(here, -out, float(np.linalg.norm(far - target)) + self.params.l2)
+        m = c._move(here, -out, float(np.linalg.norm(far - target)) + c.params.l2)
         if m.event != "touch":
-            self._note(f"a probe at z = {z:.4f} m found nothing ({m.event})")
+            c._note(f"a probe at z = {z:.4f} m found nothing ({m.event})")
             return True
-        f = self._follow(m.closed)
-        first = len(self.contacts)
-        self._record(m, f, "touch")
-        t = self._tangent(f)
+        f = c._follow(m.closed)
+        first = len(c.contacts)
+        c._record(m, f, "touch")
+        t = c._tangent(f)
         if t is None:
             return True
-        sm, travelled = self._slide_sampled(np.asarray(m.end, dtype=float), t, f, self.reach)
+        sm, travelled = c._slide_sampled(np.asarray(m.end, dtype=float), t, f, c.reach)
         same = frozenset(m.closed) == group
-        if not same and travelled < self.edge_slide and self._rolled(sm, f):
-            del self.contacts[first:]  # an edge, not the surface
+        if not same and travelled < c.edge_slide and c._rolled(sm, f):
+            del c.contacts[first:]  # an edge, not the surface
             return True
         if travelled > 1e-6:
-            self._record(sm, f, "slide")
+            c._record(sm, f, "slide")
         return True
 
-    def _finish_layer(
-        self, index: int, z: float, path: list[Vec3], first: int, closed: bool
-    ) -> None:
-        # the contour polygon is geometry: the model computes it from the layer's contacts
-        del first
-        self.layers.append(Layer(index=index, z=float(z), path=list(path), closed=closed))
 
-    def _top(self, contacts: list[Contact]) -> None:
+class _TopPhase:
+    """The top phase: tops, which contouring in horizontal planes cannot touch, are explored
+    from above over the middle of the last contour."""
+
+    def __init__(self, controller: Controller) -> None:
+        self._c = controller
+
+    def run(self, contacts: list[Contact]) -> None:
         """Approach from above over the middle of the last contour; slide round a diamond on it.
 
         The diamond's corners lie on the contour's principal axes at ``top_spread`` × its
         half-widths, so that the tip centres on the top span it. A touch that cannot slide
         (an apex or an edge) is noted and not recorded as a plane.
         """
-        if self.finger.nearest((0.0, 0.0, -1.0)) is None:
-            self._note("no sensor points down: tops are not explored")
+        c = self._c
+        if c.finger.nearest((0.0, 0.0, -1.0)) is None:
+            c._note("no sensor points down: tops are not explored")
             return
         if len(contacts) < 2:
             return
         xy = np.asarray([c.centre[:2] for c in contacts], dtype=float)
         mid = xy.mean(axis=0)
         _, _, vt = np.linalg.svd(xy - mid, full_matrices=False)
-        half = np.abs((xy - mid) @ vt.T).max(axis=0) - self.rho
-        reach = np.maximum(self.params.top_spread * half, 0.001)
-        top = float(self.world.hint.hi[2]) + self.rho + self.params.approach_margin
+        half = np.abs((xy - mid) @ vt.T).max(axis=0) - c.rho
+        reach = np.maximum(c.params.top_spread * half, 0.001)
+        top = float(c.world.hint.hi[2]) + c.rho + c.params.approach_margin
         start = (float(mid[0]), float(mid[1]), top)
-        if not self.world.workspace.contains(start):
+        if not c.world.workspace.contains(start):
             return
-        m = self._move(start, -_Z, top - self.rho)
+        m = c._move(start, -_Z, top - c.rho)
         if m.event != "touch":
-            self._note(f"the approach from above at {_fmt(start)} found nothing ({m.event})")
+            c._note(f"the approach from above at {_fmt(start)} found nothing ({m.event})")
             return
-        f = self._follow(m.closed)
-        first = len(self.contacts)
-        self._record(m, f, "touch")
+        f = c._follow(m.closed)
+        first = len(c.contacts)
+        c._record(m, f, "touch")
         pos = np.asarray(m.end, dtype=float)
         a1 = np.array([vt[0, 0], vt[0, 1], 0.0])
         a2 = np.array([vt[1, 0], vt[1, 1], 0.0])
@@ -904,16 +1233,16 @@ class Controller:
             (_unit(b - a), float(np.linalg.norm(b - a))) for a, b in itertools.pairwise(corners)
         ]
         for direction, length in legs:
-            sm, travelled = self._slide_sampled(pos, direction, f, length)
+            sm, travelled = c._slide_sampled(pos, direction, f, length)
             moved += travelled
             pos = np.asarray(sm.end, dtype=float)
             if travelled > 1e-6:
-                self._record(sm, f, "slide")
+                c._record(sm, f, "slide")
             if sm.event != "none":
                 break
-        if moved < self.edge_slide:
-            del self.contacts[first:]
-            self._note(f"the touch from above at {_fmt(m.end)} is an apex or an edge: not a plane")
+        if moved < c.edge_slide:
+            del c.contacts[first:]
+            c._note(f"the touch from above at {_fmt(m.end)} is an apex or an edge: not a plane")
 
 
 @dataclass
@@ -966,6 +1295,15 @@ def _exit(point: FloatArray, direction: FloatArray, lo: FloatArray, hi: FloatArr
         elif direction[k] < -1e-12:
             t = min(t, (lo[k] - point[k]) / direction[k])
     return max(t, 0.0) if math.isfinite(t) else 0.0
+
+
+def _chord(start: FloatArray, end: FloatArray, least: float, fallback: Vec3) -> FloatArray:
+    """The horizontal unit direction from ``start`` to ``end`` when they lie at least ``least``
+    apart (a slide's mean direction over an irregular surface), else ``fallback``."""
+    chord = np.array([end[0] - start[0], end[1] - start[1], 0.0])
+    if float(np.linalg.norm(chord)) >= least:
+        return _unit(chord)
+    return np.asarray(fallback, dtype=float)
 
 
 def _radius(contacts: Sequence[Contact]) -> float:

@@ -22,9 +22,11 @@ from tactile_kb_mujoco.scene import SceneOptions
 from tactile_kb_mujoco.world import MujocoWorld
 
 if TYPE_CHECKING:
+    from collections.abc import Callable
+
     import trimesh
 
-    from tactile_kb.touch.servo import ServoParams
+    from tactile_kb.touch.servo import Completer, ServoParams
 
 __all__ = ["MujocoExplorer"]
 
@@ -48,6 +50,9 @@ class MujocoExplorer(WorldExplorer):
     dropout, false_fire
         Sensor fault probabilities, added to the simulation by
         :class:`tactile_kb.touch.sensors.FaultySensors` as in every world.
+    completer
+        Makes the completer of one exploration (see
+        :class:`~tactile_kb.touch.explorers.WorldExplorer`).
     """
 
     name = "mujoco"
@@ -62,8 +67,9 @@ class MujocoExplorer(WorldExplorer):
         options: SceneOptions | None = None,
         dropout: float = 0.0,
         false_fire: float = 0.0,
+        completer: Callable[[], Completer] | None = None,
     ) -> None:
-        super().__init__(params, dropout=dropout, false_fire=false_fire)
+        super().__init__(params, completer=completer, dropout=dropout, false_fire=false_fire)
         self.speed = speed
         self.press = press
         self.threshold = threshold

@@ -1,0 +1,229 @@
+"""Real and scan-like objects: the vendored real meshes and perturbed ideal solids, explored and
+classified.
+
+Run: ``.venv/bin/python benchmarks/bench_real.py [--instances N] [--seeds N] [--levels 1,2,3]
+[--workers N] [--explorer NAME ...]`` (or ``python benchmarks/run.py real``). It never fails;
+it prints, per group (real objects; perturbed solids per level) and explorer:
+
+* right answers (%) over both rule files, with and without 0.5 mm contact-position noise;
+* "needs a closed model" endings (the exploration did not close the envelope);
+* the median touches per face on boxes (cubes and rectangular parallelepipeds);
+* the median seconds per object, and its ratio to the same ideal solid's seconds.
+
+The real objects are ``tests/data/real`` (labels from its ``manifest.csv``); the perturbed
+solids are every family of ``bench_accuracy`` (one random instance each by default) made
+scan-like by :func:`tactile_kb.perturb.perturb` at levels 1–3 with 2 seeds. Level 3 cuts holes
+and adds floating specks; an explorer that refuses such a mesh shows as an error. The
+``mujoco`` explorer is measured when its plugin is installed.
+"""
+
+from __future__ import annotations
+
+import argparse
+import csv
+import multiprocessing
+import statistics
+import sys
+import time
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+import trimesh
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+
+from bench_accuracy import FAMILIES, NOISE, faces_to_touch
+
+from tactile_kb.objects import load_object
+from tactile_kb.perturb import perturb
+from tactile_kb.pipeline import classify
+from tactile_kb.touch.explorers import available_explorers
+
+REAL = Path(__file__).resolve().parent.parent / "tests" / "data" / "real"
+POLY_TO_PARALLELEPIPEDS = {
+    "cube": "cube",
+    "rectangular_parallelepiped": "rectangular_parallelepiped",
+    "nonrectangular_parallelepiped": "nonrectangular_parallelepiped",
+}
+BOXES = {"cube", "rectangular_parallelepiped"}
+
+
+@dataclass(frozen=True)
+class Job:
+    group: str
+    name: str
+    mesh: trimesh.Trimesh
+    ideal: trimesh.Trimesh | None
+    rules: str
+    label: str
+    noise: float
+    explorer: str
+    faces: int
+
+
+@dataclass(frozen=True)
+class Outcome:
+    job: Job
+    got: str
+    touches: int
+    seconds: float
+
+    @property
+    def right(self) -> bool:
+        return self.got == self.job.label
+
+    @property
+    def open_model(self) -> bool:
+        return "needs a closed model" in self.got
+
+
+def _label_for(rules: str, poly_label: str, mesh: trimesh.Trimesh) -> str | None:
+    """The true label under ``rules`` of an object whose polyhedra label is ``poly_label``."""
+    if rules == "polyhedra":
+        return poly_label
+    if poly_label in POLY_TO_PARALLELEPIPEDS:
+        return POLY_TO_PARALLELEPIPEDS[poly_label]
+    if poly_label == "curved":
+        return "not_hexahedron"
+    return "other_hexahedron" if faces_to_touch(mesh) + 1 == 6 else "not_hexahedron"
+
+
+def _classify(mesh: trimesh.Trimesh, job: Job) -> tuple[str, int, float]:
+    t0 = time.perf_counter()
+    try:
+        r = classify(mesh, rules=job.rules, explorer=job.explorer, noise=job.noise, seed=0)
+        got, touches = r.decision.label, r.record.touches
+    except Exception as exc:  # a benchmark reports failures, it does not stop on them
+        got, touches = f"error: {type(exc).__name__}: {exc}"[:200], 0
+    return got, touches, time.perf_counter() - t0
+
+
+def run_job(job: Job) -> Outcome:
+    got, touches, seconds = _classify(job.mesh, job)
+    return Outcome(job, got, touches, seconds)
+
+
+def _key(job: Job) -> tuple[str, str, str, float]:
+    """The same ideal solid, rules, explorer and noise (perturbation seeds aside)."""
+    return (job.name.rsplit(" seed ", 1)[0], job.rules, job.explorer, job.noise)
+
+
+def jobs(instances: int, seeds: int, levels: list[int], explorers: list[str]) -> list[Job]:
+    out: list[Job] = []
+    with (REAL / "manifest.csv").open(newline="") as f:
+        rows = list(csv.DictReader(f))
+    for explorer in explorers:
+        for noise in (0.0, NOISE):
+            for row in rows:
+                mesh = load_object(REAL / row["path"])
+                out.append(
+                    Job(
+                        "real",
+                        row["path"],
+                        mesh,
+                        None,
+                        row["rules"],
+                        row["label"],
+                        noise,
+                        explorer,
+                        faces_to_touch(mesh),
+                    )
+                )
+        for k, fam in enumerate(FAMILIES):
+            rng = np.random.default_rng(2000 + k)
+            for _ in range(instances):
+                ideal, poly_label, desc = fam.build(rng)
+                for rules in ("polyhedra", "parallelepipeds"):
+                    label = _label_for(rules, poly_label, ideal)
+                    for noise in (0.0, NOISE):
+                        out.append(
+                            Job(
+                                "ideal",
+                                f"{fam.name}: {desc}",
+                                ideal,
+                                None,
+                                rules,
+                                label,
+                                noise,
+                                explorer,
+                                faces_to_touch(ideal),
+                            )
+                        )
+                for level in levels:
+                    for seed in range(seeds):
+                        scan = perturb(ideal, level, seed=seed)
+                        for rules in ("polyhedra", "parallelepipeds"):
+                            label = _label_for(rules, poly_label, ideal)
+                            for noise in (0.0, NOISE):
+                                out.append(
+                                    Job(
+                                        f"level {level}",
+                                        f"{fam.name}: {desc} seed {seed}",
+                                        scan,
+                                        ideal,
+                                        rules,
+                                        label,
+                                        noise,
+                                        explorer,
+                                        faces_to_touch(ideal),
+                                    )
+                                )
+    return out
+
+
+def main(argv: list[str] | None = None) -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--instances", type=int, default=1, help="random objects per family")
+    ap.add_argument("--seeds", type=int, default=2, help="perturbation seeds per object")
+    ap.add_argument("--levels", default="1,2,3", help="perturbation levels")
+    ap.add_argument("--workers", type=int, default=2, help="processes")
+    ap.add_argument("--explorer", action="append", default=[], help="explorers (default: all)")
+    args = ap.parse_args(argv if argv is not None else [])
+    known = available_explorers()
+    explorers = args.explorer or [e for e in ("stepper", "mujoco") if e in known]
+    levels = [int(v) for v in args.levels.split(",") if v]
+    todo = jobs(args.instances, args.seeds, levels, explorers)
+    t0 = time.perf_counter()
+    if args.workers > 1:
+        with multiprocessing.get_context("fork").Pool(args.workers) as pool:
+            results = pool.map(run_job, todo, chunksize=1)
+    else:
+        results = [run_job(j) for j in todo]
+    ideal = {_key(o.job): o.seconds for o in results if o.job.group == "ideal"}
+    head = (
+        f"{'explorer':9s} {'group':8s} {'right':>9s} {'acc %':>6s} {'open':>5s} "
+        f"{'t/face box':>10s} {'s/obj':>6s} {'× ideal':>7s}"
+    )
+    print(head)
+    print("-" * len(head))
+    for explorer in explorers:
+        for group in dict.fromkeys(o.job.group for o in results):
+            rs = [o for o in results if o.job.group == group and o.job.explorer == explorer]
+            if not rs:
+                continue
+            right = sum(o.right for o in rs)
+            opened = sum(o.open_model for o in rs)
+            boxes = [o.touches / o.job.faces for o in rs if o.job.label in BOXES and o.job.faces]
+            tpf = f"{statistics.median(boxes):10.2f}" if boxes else f"{'-':>10s}"
+            secs = statistics.median(o.seconds for o in rs)
+            ratios = [o.seconds / ideal[_key(o.job)] for o in rs if _key(o.job) in ideal]
+            ratio = f"{statistics.median(ratios):7.2f}" if ratios else f"{'-':>7s}"
+            print(
+                f"{explorer:9s} {group:8s} {right:4d}/{len(rs):<4d} {100 * right / len(rs):6.1f} "
+                f"{opened:5d} {tpf} {secs:6.2f} {ratio}"
+            )
+    print(f"{len(results)} classifications in {time.perf_counter() - t0:.1f} s")
+    wrong = [o for o in results if not o.right]
+    if wrong:
+        print(f"\nwrong ({len(wrong)}):")
+        for o in wrong:
+            j = o.job
+            noise = "noisy" if j.noise else "exact"
+            print(
+                f"  [{j.explorer} {j.group} {j.rules} {noise}] {j.name}: want {j.label}, got {o.got}"
+            )
+
+
+if __name__ == "__main__":
+    main(sys.argv[1:])

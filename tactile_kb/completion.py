@@ -1,0 +1,352 @@
+"""Completion driven by the model: probe what the contour following left open.
+
+Contour following in horizontal planes (:mod:`tactile_kb.touch.servo`) touches every face of an
+ideal solid at two heights. On real objects it can stop early (a surface it cannot follow, a
+side it never reached) and leave the enveloping polyhedron open, or leave a face with tip
+centres at one height only (its normal then cannot be fitted). :class:`ModelCompleter` looks at
+the model built from the record so far (:func:`tactile_kb.geometry.model.build_model`) and asks the
+controller for one more touch at a time (a :class:`~tactile_kb.touch.servo.Probe`: approach along
+the missing normal from outside the object), until
+
+* the envelope is closed and every side face has tip centres at two heights
+  (ending ``"closed"``), or
+* the budget (:class:`CompletionParams`: touches and path length spent by the completion)
+  runs out (``"budget"``), or
+* what stayed open cannot be reached: :attr:`CompletionParams.attempts` probes for it found
+  nothing, were blocked on the way, or did not close it (``"unreachable"``).
+
+The record says which happened (``record.ending``, ``record.unreachable`` and a note). The
+controller computes no geometry: it carries out probes given as plain values; this module,
+above it, computes them from the model.
+
+Examples
+--------
+>>> from tactile_kb.solids import box
+>>> from tactile_kb.touch.stepper import StepperExplorer
+>>> rec = completing(StepperExplorer()).explore(box(0.06, 0.05, 0.04))
+>>> rec.ending, rec.unreachable
+('closed', [])
+"""
+
+from __future__ import annotations
+
+import copy
+import math
+from collections import Counter
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+
+from tactile_kb.errors import TactileKBError, UsageError
+from tactile_kb.geometry.model import ObjectModel, build_model
+from tactile_kb.geometry.planes import Face
+from tactile_kb.record import ExplorationRecord
+from tactile_kb.touch.explorers import Explorer, WorldExplorer
+from tactile_kb.touch.servo import Ending, Probe
+from tactile_kb.types import FloatArray
+
+__all__ = [
+    "DEFAULT_COMPLETION",
+    "CompletionParams",
+    "ModelCompleter",
+    "completing",
+    "completion_probes",
+    "model_completer",
+]
+
+_SIDES = 8  # horizontal directions checked for a side never touched (every 45°)
+
+TOP_NZ = 0.8
+"""A face whose normal's z component is at least this is a top, probed from above when its tip
+centres lie along one line (:func:`completion_probes`)."""
+
+
+@dataclass(frozen=True)
+class CompletionParams:
+    """The budget and thresholds of the completion.
+
+    Attributes
+    ----------
+    touches
+        At most this many touches spent by the completion.
+    path
+        At most this much tip-centre path (metres) spent by the completion.
+    attempts
+        Probes for one open item (a direction, a face) before it counts as unreachable (when
+        they found nothing, or what they found did not close it).
+    height_gap
+        Tip centres on a face lie at two heights when they span at least this much in z
+        (metres); ``None``: half the tip radius.
+    """
+
+    touches: int = 24
+    path: float = 4.0
+    attempts: int = 2
+    height_gap: float | None = None
+
+    def __post_init__(self) -> None:
+        if self.touches < 0 or self.attempts < 1:
+            raise UsageError("completion touches must be ≥ 0 and attempts ≥ 1")
+        if not (math.isfinite(self.path) and self.path >= 0):
+            raise UsageError(f"completion path must be ≥ 0 metres, got {self.path}")
+        if self.height_gap is not None and not (
+            math.isfinite(self.height_gap) and self.height_gap > 0
+        ):
+            raise UsageError(f"completion height_gap must be > 0 metres, got {self.height_gap}")
+
+
+DEFAULT_COMPLETION = CompletionParams()
+"""The completion's default budget: 24 touches, 4 m of path."""
+
+
+def _name(v: FloatArray) -> str:
+    return "(" + ", ".join(f"{round(float(x), 1) + 0.0:+.1f}" for x in v) + ")"
+
+
+def completion_probes(model: ObjectModel, *, height_gap: float | None = None) -> list[Probe]:
+    """The probes that would close ``model`` or give a face a second height, most urgent first.
+
+    * Open: one probe per open direction (approached from that side at the middle of the
+      touched heights; towards +z, from above), or, when the planes contradict each other
+      and name no direction, one per horizontal side (every 45°) and the top that no face
+      faces yet. Directions under the object (the table's side) are not probed.
+    * Closed: one probe per side face whose tip centres lie at one height, at the other end
+      of the face's height range (faces lower than the tip's diameter are left as they are),
+      and two from above beside a top whose tip centres lie along one line (a ridge).
+    """
+    record = model.record
+    rho = record.tip_radius
+    gap = height_gap if height_gap is not None else 0.5 * rho
+    centres = np.asarray([c.centre for c in record.contacts], dtype=float).reshape(-1, 3)
+    if len(centres) == 0:
+        return []
+    lo, hi = centres.min(axis=0), centres.max(axis=0)
+    mid = 0.5 * (lo + hi)
+    reach = float(np.linalg.norm(hi - lo)) + 4.0 * rho
+    z_mid = max(float(mid[2]), rho + 0.001)
+    probes: list[Probe] = []
+    if model.polyhedron is None:
+        directions = [np.asarray(d, dtype=float) for d in model.open_directions]
+        if not directions:  # contradictory planes: probe every side nothing faces yet
+            normals = np.asarray([f.normal for f in model.faces], dtype=float).reshape(-1, 3)
+            candidates = [
+                np.array([math.cos(a), math.sin(a), 0.0])
+                for a in np.arange(_SIDES) * 2 * math.pi / _SIDES
+            ] + [np.array([0.0, 0.0, 1.0])]
+            cos = math.cos(math.radians(50.0))
+            directions = [d for d in candidates if not (normals @ d >= cos).any()]
+        for d in directions:
+            d = d / float(np.linalg.norm(d))
+            if d[2] < -0.5:
+                continue  # under the object: the table
+            if d[2] > 0.9:
+                target = np.array([mid[0], mid[1], hi[2]])
+                probes.append(
+                    Probe(_v(target), (0.0, 0.0, 1.0), reach, "open towards +z", middle=True)
+                )
+            else:
+                target = np.array([mid[0], mid[1], z_mid])
+                probes.append(
+                    Probe(_v(target), _v(d), reach, f"open towards {_name(d)}", middle=True)
+                )
+        unique = {p.reason: p for p in reversed(probes)}  # the first of each direction
+        return [p for p in probes if unique[p.reason] is p]
+    poly = model.polyhedron
+    for k, verts in enumerate(poly.faces):
+        index = model.face_of[k] if k < len(model.face_of) else -1
+        if index < 0:
+            continue
+        face = model.faces[index]
+        n = np.asarray(face.normal, dtype=float)
+        if face.source == "contacts" and n[2] >= TOP_NZ:
+            probes += _top_probes(face, poly.vertices[list(verts)], centres, rho)
+            continue
+        if face.source != "contacts" or abs(n[2]) > 0.9 or n[2] < -0.5:
+            continue  # tops, the table, undersides: not probed at another height
+        zs = centres[list(face.contacts), 2] if face.contacts else np.zeros(0)
+        if len(zs) and float(zs.max() - zs.min()) >= gap:
+            continue
+        ring = poly.vertices[list(verts)]
+        z0, z1 = float(ring[:, 2].min()), float(ring[:, 2].max())
+        if z1 - z0 < 2.0 * rho:
+            continue  # lower than the tip is wide: one height is all it can give
+        margin = min(rho, 0.25 * (z1 - z0))
+        # the surface heights the tip can touch on this face, clear of its edges (the tip
+        # centre stays 1.5 ρ above the table: scanned bottom edges bulge)
+        lo_z = max(z0 + margin, 1.5 * rho - rho * n[2])
+        hi_z = z1 - margin
+        if hi_z <= lo_z:
+            continue
+        have = float(zs.mean()) - rho * n[2] if len(zs) else 0.5 * (lo_z + hi_z)
+        z = lo_z if abs(lo_z - have) > abs(hi_z - have) else hi_z
+        if abs(z - have) < gap:
+            continue  # the face is too low for two heights
+        point = _section_point(ring, z)
+        if point is None:
+            continue
+        probes.append(
+            Probe(
+                _v(point + rho * n),
+                _v(n),
+                4.0 * rho,
+                f"the face facing {_name(n)} touched at one height",
+            )
+        )
+    return probes
+
+
+def _top_probes(face: Face, ring: FloatArray, centres: FloatArray, rho: float) -> list[Probe]:
+    """Probes from above beside a top whose tip centres lie along one line.
+
+    A touch from above that lands on a ridge (a gabled carton's seal) slides along it, and the
+    line of tip centres fits any plane through the ridge: the top is not known until it is
+    touched off that line. Two probes, one each side of the line, halfway to the face's
+    border; none when the centres already span the face (more than ρ / 2 across the line).
+    """
+    pts = centres[list(face.contacts), :2] if face.contacts else np.zeros((0, 2))
+    if len(pts) < 2:
+        return []
+    mid = pts.mean(axis=0)
+    _, sv, vt = np.linalg.svd(pts - mid, full_matrices=False)
+    if len(sv) > 1 and sv[1] / math.sqrt(len(pts)) >= 0.5 * rho:
+        return []
+    across = np.array([-vt[0, 1], vt[0, 0]])
+    half = float(np.abs((ring[:, :2] - mid) @ across).max())
+    if half < rho:
+        return []
+    n = np.asarray(face.normal, dtype=float)
+    top = float(ring[:, 2].max()) + rho
+    reach = float(np.ptp(ring[:, 2])) + 4.0 * rho
+    out = []
+    for sign, side in ((1.0, "+"), (-1.0, "-")):
+        xy = mid + sign * 0.5 * half * across
+        out.append(
+            Probe(
+                (float(xy[0]), float(xy[1]), top),
+                (0.0, 0.0, 1.0),
+                reach,
+                f"the top facing {_name(n)} touched along one line ({side} side)",
+            )
+        )
+    return out
+
+
+def _section_point(ring: FloatArray, z: float) -> FloatArray | None:
+    """The middle of the face polygon ``ring`` at height ``z`` (mean of its edges' crossings)."""
+    pts = []
+    for a, b in zip(ring, np.roll(ring, -1, axis=0), strict=True):
+        if (a[2] - z) * (b[2] - z) <= 0 and abs(b[2] - a[2]) > 1e-12:
+            t = (z - a[2]) / (b[2] - a[2])
+            pts.append(a + t * (b - a))
+    if not pts:
+        return None
+    point: FloatArray = np.mean(pts, axis=0)
+    return point
+
+
+def _over_the_rim(record: ExplorationRecord, probe: Probe) -> Probe:
+    """The probe from above moved over the highest touched point, 1.5 ρ inwards: when the
+    middle of the object is a cavity (a mug), its top is a rim next to the highest contact."""
+    centres = np.asarray([c.centre for c in record.contacts], dtype=float)
+    top = centres[int(np.argmax(centres[:, 2]))]
+    mid = np.asarray(probe.target, dtype=float)
+    inwards = np.array([mid[0] - top[0], mid[1] - top[1], 0.0])
+    length = float(np.linalg.norm(inwards))
+    if length < 1e-9:
+        return probe
+    point = top + inwards / length * min(length, 1.5 * record.tip_radius)
+    return Probe(_v(point), probe.normal, probe.reach, probe.reason, middle=False)
+
+
+def _v(a: FloatArray) -> tuple[float, float, float]:
+    return (float(a[0]), float(a[1]), float(a[2]))
+
+
+class ModelCompleter:
+    """A :class:`~tactile_kb.touch.servo.Completer`: probes from the model of the record so far.
+
+    Parameters
+    ----------
+    params
+        The budget and thresholds (default :data:`DEFAULT_COMPLETION`).
+    """
+
+    def __init__(self, params: CompletionParams | None = None) -> None:
+        self.params = params or DEFAULT_COMPLETION
+        self._start: tuple[int, float] | None = None
+        self._tried: Counter[str] = Counter()
+        self.probes = 0
+
+    def next_probe(
+        self, record: ExplorationRecord, last: tuple[Probe, bool] | None
+    ) -> Probe | Ending:
+        """The next probe for ``record``, or how the completion ended."""
+        if self._start is None:
+            self._start = (record.touches, record.path_length)
+        try:
+            model = build_model(record)
+        except (TactileKBError, np.linalg.LinAlgError, ValueError) as exc:
+            text = f"the model cannot be built after {record.touches} touches: {exc}"
+            return Ending("unreachable", text, (str(exc),))
+        wanted = completion_probes(model, height_gap=self.params.height_gap)
+        open_items = [p.reason for p in wanted]
+        if model.polyhedron is None and not wanted:
+            open_items = [model.open_reason or "the model is open"]
+        todo = [p for p in wanted if self._tried[p.reason] < self.params.attempts]
+        touches = record.touches - self._start[0]
+        path = record.path_length - self._start[1]
+        if not open_items:
+            return Ending(
+                "closed",
+                f"the model is closed and every side face has tip centres at two heights "
+                f"({record.touches} touches, {touches} of them by the completion)",
+            )
+        if not todo:
+            what = (
+                "the model stayed open"
+                if model.polyhedron is None
+                else "the model is closed but not every face was touched at two heights"
+            )
+            return Ending(
+                "unreachable",
+                f"{what} after {record.touches} touches; unreachable: " + "; ".join(open_items),
+                tuple(open_items),
+            )
+        if touches >= self.params.touches or path >= self.params.path:
+            return Ending(
+                "budget",
+                f"the completion budget ran out ({touches} of {self.params.touches} touches, "
+                f"{path:.2f} of {self.params.path:g} m of path; {record.touches} touches in "
+                "all): still open: " + "; ".join(open_items),
+                tuple(open_items),
+            )
+        self.probes += 1
+        probe = todo[0]
+        if probe.reason == "open towards +z" and self._tried[probe.reason]:
+            probe = _over_the_rim(record, probe)
+        self._tried[probe.reason] += 1
+        return probe
+
+
+def model_completer(params: CompletionParams | None = None) -> Callable[[], ModelCompleter]:
+    """A factory of :class:`ModelCompleter` (one per exploration), for ``WorldExplorer(completer=…)``."""
+
+    def make() -> ModelCompleter:
+        return ModelCompleter(params)
+
+    return make
+
+
+def completing(explorer: Explorer, params: CompletionParams | None = None) -> Explorer:
+    """``explorer`` with the model-driven completion: a copy of a
+    :class:`~tactile_kb.touch.explorers.WorldExplorer` that has no completer of its own gets
+    :func:`model_completer`; any other explorer is returned as it is.
+
+    The touch stage knows nothing of models, so the completion is attached here, above both
+    stages; :func:`tactile_kb.classify` and the command line explore through this.
+    """
+    if isinstance(explorer, WorldExplorer) and explorer.completer is None:
+        explorer = copy.copy(explorer)
+        explorer.completer = model_completer(params)
+    return explorer

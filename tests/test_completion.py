@@ -1,0 +1,195 @@
+"""Exploration that completes on imperfect objects: riding over irregularities, completion
+driven by the model, and how an exploration that cannot close says so."""
+
+from __future__ import annotations
+
+import json
+from collections.abc import Callable
+from pathlib import Path
+
+import numpy as np
+import pytest
+import trimesh
+from scanlike import bumped, jittered, rounded_box
+
+from tactile_kb import solids
+from tactile_kb.cli import main
+from tactile_kb.completion import CompletionParams, completion_probes, model_completer
+from tactile_kb.geometry.model import build_model
+from tactile_kb.pipeline import classify
+from tactile_kb.record import ExplorationRecord
+from tactile_kb.touch.servo import ServoParams
+from tactile_kb.touch.stepper import StepperExplorer
+
+RHO = 0.005  # the 33-sensor finger's tip radius
+
+# Fig. 5 with the parallelepipeds rules: the touches 0.1 needed for each answer (the paper's
+# rules on ideal solids are unchanged: riding and completion add none)
+FIG5_TOUCHES = {
+    "OCTA": 14,
+    "CUBE1": 9,
+    "CUBE2": 9,
+    "TETRA": 7,
+    "PRAPAR": 9,
+    "KOPAR": 10,
+    "TETRA1": 7,
+    "TETRA2": 7,
+    "CUBE11": 9,
+    "CUBE22": 9,
+    "PRAPA1": 9,
+    "KOPAR1": 10,
+}
+
+
+def test_fig5_keeps_its_answers_and_touch_counts() -> None:
+    for name, mesh, expected in solids.fig5_objects():
+        result = classify(mesh, rules="parallelepipeds", seed=0)
+        assert result.decision.label == expected, name
+        assert result.record.touches == FIG5_TOUCHES[name], name
+        assert result.record.ending == "closed", name
+        assert "complete" not in result.record.contacts_per_phase, name  # no probe needed
+
+
+BOX = (0.08, 0.06, 0.05)
+
+PERTURBED: dict[str, Callable[[], trimesh.Trimesh]] = {
+    "box jittered 0.2 mm": lambda: jittered(solids.box(*BOX), 0.0002, seed=1),
+    "box jittered 1 mm": lambda: jittered(solids.box(*BOX), 0.001, seed=2),
+    "box with rounded edges": lambda: rounded_box(*BOX, radius=0.005),
+    "box with 1 mm bumps": lambda: bumped(solids.box(*BOX), 0.001, bumps=12, seed=3),
+    "can jittered 0.5 mm": lambda: jittered(
+        solids.cylinder(0.033, 0.12, sections=64), 0.0005, seed=5, edge=0.006
+    ),
+}
+
+
+@pytest.mark.parametrize("name", list(PERTURBED))
+def test_exploration_completes_on_scan_like_objects(name: str) -> None:
+    mesh = PERTURBED[name]()
+    rec = StepperExplorer(completer=model_completer()).explore(mesh, seed=0)
+    assert rec.ending == "closed", rec.notes
+    assert rec.open_ending == ""
+    model = build_model(rec)
+    assert model.polyhedron is not None, model.open_reason
+    # every side was reached: the envelope spans the object across within 3 mm, and up to its
+    # top (how well a rough face's plane is fitted is the geometry's business, not tested here)
+    lo, hi = model.polyhedron.vertices.min(axis=0), model.polyhedron.vertices.max(axis=0)
+    assert np.allclose(lo[:2], mesh.bounds[0][:2], atol=0.003), (lo, mesh.bounds)
+    assert np.allclose(hi[:2], mesh.bounds[1][:2], atol=0.003), (hi, mesh.bounds)
+    assert hi[2] >= np.ptp(mesh.bounds[:, 2]) - 0.003
+    # every side face at least as high as the tip is wide has tip centres at two heights
+    centres = np.asarray([c.centre for c in rec.contacts])
+    for k, verts in enumerate(model.polyhedron.faces):
+        face = model.faces[model.face_of[k]]
+        ring = model.polyhedron.vertices[list(verts)]
+        if face.source != "contacts" or abs(face.normal[2]) > 0.9:
+            continue
+        if np.ptp(ring[:, 2]) < 2 * RHO:
+            continue
+        zs = centres[list(face.contacts), 2]
+        assert np.ptp(zs) >= 0.5 * RHO, (name, face.normal)
+
+
+def test_riding_is_what_lets_the_contour_go_round_a_jittered_box() -> None:
+    mesh = jittered(solids.box(*BOX), 0.0005, seed=0)
+    paper = StepperExplorer(ServoParams(comply=False, probe=False, top=False)).explore(mesh)
+    assert not paper.layers[0].closed
+    assert any("blocked the slide without a sensor change" in n for n in paper.notes)
+    riding = StepperExplorer(
+        ServoParams(probe=False, top=False), completer=model_completer()
+    ).explore(mesh)
+    assert riding.layers[0].closed
+    assert any(n.endswith("surface irregularities ridden over") for n in riding.notes)
+    # riding records slide contacts, not touches: about two touches a face or fewer
+    assert riding.contacts_per_phase["layers"] > 4 * riding.touches
+
+
+def test_a_spent_budget_is_the_ending_with_its_touch_count() -> None:
+    mesh = jittered(solids.box(*BOX), 0.0002, seed=1)
+    rec = StepperExplorer(completer=model_completer(CompletionParams(touches=0))).explore(
+        mesh, seed=0
+    )
+    assert rec.ending == "budget"
+    assert rec.unreachable
+    assert all(u.startswith(("open towards", "the face facing")) for u in rec.unreachable)
+    assert len(set(rec.unreachable)) == len(rec.unreachable)
+    assert rec.open_ending == (
+        f"the exploration's budget ran out after {rec.touches} touches; still open: "
+        + "; ".join(rec.unreachable)
+    )
+    assert "complete" not in rec.contacts_per_phase
+
+
+def test_what_the_finger_cannot_feel_is_named_unreachable() -> None:
+    # the 4-sensor finger has no sensor pointing down: it can never feel a top
+    rec = StepperExplorer(completer=model_completer()).explore(
+        solids.box(0.06, 0.05, 0.04), finger="4", seed=0
+    )
+    assert rec.ending == "unreachable"
+    assert rec.unreachable == ["open towards +z"]
+    assert "could not be reached" in rec.open_ending
+
+
+def test_explore_says_on_stderr_why_the_model_is_not_closed(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    path = tmp_path / "box.stl"
+    solids.box(0.06, 0.05, 0.04).export(path)
+    out = tmp_path / "rec.json"
+    assert main(["explore", str(path), "--finger", "4", "--out", str(out)]) == 0
+    err = capsys.readouterr().err
+    assert err.startswith(f"tactile-kb: warning: {path}: what stayed open could not be reached")
+    assert err.rstrip().endswith("still open: open towards +z")
+    assert len(err.splitlines()) == 1
+    assert main(["explore", str(path), "--out", str(out)]) == 0
+    assert capsys.readouterr().err == ""  # closed: nothing to say
+
+
+def test_records_without_an_ending_still_load(tmp_path: Path) -> None:
+    rec = StepperExplorer(completer=model_completer()).explore(solids.box(0.06, 0.05, 0.04), seed=0)
+    data = json.loads(rec.to_json())
+    del data["ending"], data["unreachable"]
+    old = ExplorationRecord.from_json(json.dumps(data))
+    assert old.ending == ""
+    assert old.unreachable == []
+    assert old.open_ending == ""
+
+
+def test_completion_probes_point_at_the_missing_side() -> None:
+    # a box explored only by its first layer's contour, without the +x side
+    rec = StepperExplorer(ServoParams(probe=False, top=False), completer=model_completer()).explore(
+        solids.box(0.06, 0.05, 0.04), seed=0
+    )
+    keep = [c for c in rec.contacts if c.direction[0] > -0.5]  # drop every +x-side contact
+    model = build_model(rec.model_copy(update={"contacts": keep}))
+    assert model.polyhedron is None
+    probes = completion_probes(model)
+    assert any(np.allclose(p.normal, (1.0, 0.0, 0.0), atol=1e-6) for p in probes)
+    assert all(p.normal[2] > -0.5 for p in probes)  # never from under the table
+
+
+def test_completion_params_are_checked() -> None:
+    with pytest.raises(Exception, match="must be"):
+        CompletionParams(touches=-1)
+    with pytest.raises(Exception, match="path"):
+        CompletionParams(path=float("nan"))
+
+
+@pytest.mark.parametrize(
+    ("what", "text"),
+    [
+        ("plane", "v 0 0 0\nv 0.05 0 0\nv 0 0.05 0\nv 0.05 0.05 0\nf 1 2 3\nf 2 4 3\n"),
+        ("points", "v 0 0 0\nv 0.05 0 0\nv 0 0.05 0\nv 0 0 0.05\n"),
+    ],
+)
+def test_explore_refuses_what_is_not_a_solid_in_one_line(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], what: str, text: str
+) -> None:
+    path = tmp_path / f"{what}.obj"
+    path.write_text(text)
+    assert main(["explore", str(path), "--out", str(tmp_path / "r.json")]) == 1
+    err = capsys.readouterr().err
+    assert err.startswith(f"tactile-kb: error: {path}: ")
+    assert len(err.splitlines()) == 1
+    assert "internal error" not in err
+    assert not (tmp_path / "r.json").exists()

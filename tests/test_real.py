@@ -1,0 +1,136 @@
+"""Objects nobody on the project made: the vendored real meshes get their expected labels, and
+the scan-like perturbations of the ideal solids (:mod:`tactile_kb.perturb`) behave as scans."""
+
+from __future__ import annotations
+
+import csv
+from pathlib import Path
+
+import numpy as np
+import pytest
+import trimesh
+
+from tactile_kb import solids
+from tactile_kb.errors import UsageError
+from tactile_kb.geometry.model import build_model
+from tactile_kb.objects import load_object
+from tactile_kb.perturb import (
+    LEVELS,
+    Perturbation,
+    perturb,
+    rounded,
+    sharp_edge_length,
+    touch_record,
+)
+from tactile_kb.pipeline import classify, classify_record
+from tactile_kb.touch.finger import builtin_finger
+
+REAL = Path(__file__).parent / "data" / "real"
+with (REAL / "manifest.csv").open(newline="") as _f:
+    ROWS = list(csv.DictReader(_f))
+FINGER = builtin_finger("33")
+
+
+def test_vendored_files_are_small_closed_solids_in_metres() -> None:
+    sizes = [p.stat().st_size for p in REAL.glob("*.ply")]
+    assert len(sizes) >= 6
+    assert max(sizes) < 300_000
+    assert sum(sizes) < 3_000_000
+    for row in ROWS:
+        mesh = load_object(REAL / row["path"])
+        assert mesh.is_watertight
+        assert mesh.body_count == 1
+        assert 0.02 <= float(mesh.extents.max()) <= 0.3  # toy and grocery sizes, metres
+    assert {r["path"] for r in ROWS} == {p.name for p in REAL.glob("*.ply")}
+
+
+# Known failures, none now: the carton's gable (the layers skip it and a touch from above
+# slides along the sealing ridge) is found by the completion's probes beside the ridge.
+KNOWN: set[tuple[str, str]] = set()
+
+
+@pytest.mark.parametrize(
+    "row",
+    [
+        pytest.param(
+            r,
+            marks=pytest.mark.xfail(
+                (r["path"], r["rules"]) in KNOWN, reason="gable not explored", strict=True
+            ),
+        )
+        for r in ROWS
+    ],
+    ids=[f"{r['path']}-{r['rules']}" for r in ROWS],
+)
+def test_real_object_gets_its_label(row: dict[str, str]) -> None:
+    result = classify(REAL / row["path"], rules=row["rules"], seed=0)
+    assert result.decision.label == row["label"], result.decision.explanation
+
+
+def test_perturb_is_deterministic_and_keeps_the_solid_on_the_table() -> None:
+    box = solids.box(0.08, 0.06, 0.04)
+    a, b = perturb(box, 2, seed=3), perturb(box, 2, seed=3)
+    assert np.array_equal(a.vertices, b.vertices)
+    assert not np.array_equal(a.vertices, perturb(box, 2, seed=4).vertices)
+    for level in (1, 2):
+        scan = perturb(box, level, seed=0)
+        assert scan.is_watertight
+        assert scan.body_count == 1
+        assert float(scan.bounds[0, 2]) == 0.0
+        # nothing moves by more than the level's bumps, relief and 5 σ of noise
+        p = LEVELS[level]
+        reach = p.bump_height * p.bumps + p.relief_height + 5 * p.noise
+        assert np.all(np.abs(scan.extents - box.extents) <= 2 * reach + 1e-9)
+    holed = perturb(box, 3, seed=0)
+    assert not holed.is_watertight
+    assert holed.body_count == 1 + LEVELS[3].specks
+
+
+def test_rounded_edges_keep_faces_and_round_corners() -> None:
+    box = trimesh.Trimesh(
+        *trimesh.remesh.subdivide_to_size(
+            solids.box(0.08, 0.06, 0.04).vertices, solids.box(0.08, 0.06, 0.04).faces, 0.002
+        )
+    )
+    r = 0.004
+    out = rounded(box, r)
+    assert np.allclose(out.extents, [0.08, 0.06, 0.04])  # faces stay where they were
+    # the corner (0.04, 0.03, 0.04) is cut: its nearest surface point is r(√3 − 1) inside
+    corner = np.array([0.04, 0.03, 0.04])
+    gap = float(np.linalg.norm(out.vertices - corner, axis=1).min())
+    assert gap == pytest.approx(r * (np.sqrt(3) - 1), rel=0.05)
+    assert sharp_edge_length(solids.box(0.08, 0.06, 0.04)) == pytest.approx(0.04)
+    with pytest.raises(UsageError, match="too large"):
+        rounded(box, 0.03)
+    with pytest.raises(UsageError, match="convex"):
+        rounded(solids.l_shape(0.1, 0.08, 0.03, 0.04), 0.002)
+    with pytest.raises(UsageError, match="level"):
+        perturb(box, 4)
+
+
+@pytest.mark.parametrize(
+    ("mesh", "label"),
+    [
+        (solids.rotate_about_z(solids.box(0.1, 0.06, 0.04), 35.0), "rectangular_parallelepiped"),
+        (solids.prism(6, 0.04, 0.07), "prism"),
+        (solids.tetrahedron(0.08), "tetrahedron"),
+    ],
+)
+@pytest.mark.parametrize("level", [1])
+def test_touched_scans_keep_their_class(mesh: trimesh.Trimesh, label: str, level: int) -> None:
+    for seed in (0, 1):
+        scan = perturb(mesh, level, seed=seed)
+        rec = touch_record(scan, mesh, FINGER, per_face=6, seed=seed)
+        assert classify_record(rec, rules="polyhedra").decision.label == label
+
+
+def test_a_touch_on_a_rounded_edge_is_not_a_face() -> None:
+    box = solids.rotate_about_z(solids.box(0.06, 0.06, 0.06), 20.0)
+    scan = perturb(box, Perturbation(rounding=0.1), seed=0)
+    rec = touch_record(scan, box, FINGER, per_face=6, seed=0)
+    tilted = [c for c in rec.contacts if c.direction not in {d.direction for d in rec.contacts[:1]}]
+    assert tilted  # some touches near the edges fired a neighbouring sensor
+    model = build_model(rec)
+    assert len(model.contact_faces) == 5
+    assert model.options["edge_contacts"]
+    assert build_model(rec, edge_rounding=None).contact_faces != model.contact_faces
