@@ -29,7 +29,16 @@ try:  # CUDD where the wheel carries it, the pure-Python implementation otherwis
 except ImportError:  # pragma: no cover - the PyPI wheel carries CUDD on this platform
     from dd import autoref as _dd
 
-__all__ = ["BACKEND", "Node", "exact_count", "expr_to_bdd", "isop", "iter_minterms", "manager"]
+__all__ = [
+    "BACKEND",
+    "Node",
+    "exact_count",
+    "expr_to_bdd",
+    "isop",
+    "iter_minterms",
+    "manager",
+    "model_count",
+]
 
 BACKEND: str = _dd.__name__
 """The dd backend in use: ``dd.cudd`` or ``dd.autoref``."""
@@ -72,13 +81,32 @@ def expr_to_bdd(bdd: Any, expr: Expr) -> Node:
     )
 
 
+def model_count(bdd: Any, u: Node, nvars: int) -> float:
+    """``bdd.count(u, nvars=nvars)``, with CUDD's garbage collection held off while it counts.
+
+    CUDD 3.0.0's ``Cudd_CountMinterm`` keeps every partial count as a constant node in the
+    manager's unique table (in a local table whose references it adjusts by hand). When those
+    allocations trigger a garbage collection in the middle of a count, the manager is left
+    inconsistent: a later cofactor hands back a dead node without reviving it, and the next
+    collection aborts the process ("dead count != deleted"). Whether one fires depends on
+    everything the process-wide manager has seen, so every count of a CUDD BDD goes through
+    here. Collection resumes as soon as the count ends.
+    """
+    if BACKEND != "dd.cudd":
+        return float(bdd.count(u, nvars=nvars))
+    bdd.configure(garbage_collection=False)
+    try:
+        return float(bdd.count(u, nvars=nvars))
+    finally:
+        bdd.configure(garbage_collection=True)
+
+
 def exact_count(bdd: Any, u: Node, names: Sequence[str]) -> int:
     """The exact number of assignments to ``names`` (a superset of u's support) satisfying u."""
     if u == bdd.false:
         return 0
     if len(names) <= 50:  # CUDD counts in doubles: exact below 2**53
-        total: float = bdd.count(u, nvars=len(names))
-        return round(total)
+        return round(model_count(bdd, u, len(names)))
     levels = sorted(bdd.level_of_var(v) for v in names)
     memo: dict[Node, int] = {}
 

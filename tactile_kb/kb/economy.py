@@ -43,6 +43,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from tactile_kb.kb.bdd import model_count
 from tactile_kb.kb.engine import ternary_closure
 from tactile_kb.kb.expr import evaluate_columns, names
 from tactile_kb.kb.expr import names as expr_names
@@ -334,7 +335,7 @@ def optimal_bdd(
         for f in s[:K]:
             w = counts.get(f)
             if w is None:
-                w = counts[f] = float(bdd.count(f, nvars=nvars))
+                w = counts[f] = model_count(bdd, f, nvars)
             ws.append(w)
         alive = [w for w, f in zip(ws, s, strict=False) if f != false]
         if s[K] != false:
