@@ -6,7 +6,7 @@ dead-node bookkeeping, and a later collection aborted the interpreter ("dead cou
 deleted"). It took a process that had already done a lot of work, so a single test passed and
 the whole suite died at random. The script below is the smallest workload found that fires
 such a collection: the benchmark's 40-proposition file compiled and its economy computed
-several times in one process (before the fix the fourth run aborted, exit code -6). It runs
+twelve times in one process (before the fix the eighth run aborted, exit code -6). It runs
 in a subprocess because the failure kills the interpreter.
 """
 
