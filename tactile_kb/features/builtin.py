@@ -434,7 +434,7 @@ def surface_curved(
     sensors fired does not matter: a touch near a (rounded) edge, or on the rim of an
     embossed letter, fires a neighbouring sensor on any real box."""
     rho = model.record.tip_radius
-    noise = float(model.record.params.get("noise", 0.0))
+    noise = model.record.noise
     res_tol = residual_tol if residual_tol is not None else max(RESIDUAL_RHO * rho, 3.0 * noise)
     if any(f.refined and f.residual > res_tol for f in model.faces):
         return True
@@ -493,7 +493,7 @@ def face_sagitta(model: ObjectModel, face: Face) -> tuple[float, float] | None:
         xs, ys = x / extent, y / extent  # well-conditioned unknowns
         design = np.column_stack([xs * xs, xs * ys, ys * ys, xs, ys, np.ones_like(xs)])
         start = np.linalg.lstsq(design, h, rcond=None)[0]
-        scale = max(float(model.record.params.get("noise", 0.0)), 1e-4)
+        scale = max(model.record.noise, 1e-4)
         from scipy.optimize import least_squares  # scipy only when a feature runs
 
         fit = least_squares(lambda p: design @ p - h, start, loss="soft_l1", f_scale=scale)

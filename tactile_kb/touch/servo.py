@@ -536,14 +536,12 @@ class Controller:
             try:
                 nxt = completer.next_probe(self.record(complete=False), last)
                 if isinstance(nxt, Ending):
-                    self.ending = nxt
-                    self._note(nxt.message)
+                    self.ending = nxt  # the record says it (ending, unreachable, open_ending)
                     return
                 last = (nxt, self.probe(nxt))
             except _Budget as exc:
                 text = f"{exc} ({self.touches} touches): the model was not completed"
                 self.ending = Ending("budget", text, (f"unknown ({exc})",))
-                self._note(text)
                 return
 
     @property
