@@ -21,7 +21,7 @@ parameter                      meaning                                          
                                ``max(tolerance_deg, sigmas·√(u₁² + u₂²))``
 ``residual_tol``               RMS misfit (m) of a face's tip centres meaning       0.3 ρ, ≥ 3σ
                                curved (ρ the tip radius, σ the declared noise)
-``sagitta_tol``                bending (m) of a face's tip centres over the face    max(0.2 ρ,
+``sagitta_tol``                bending (m) of a face's tip centres over the face    max(0.5 ρ,
                                meaning curved (:func:`face_sagitta`)                3 % extent,
                                                                                     4σ)
 ``spread_deg``                 directions of two contacts inside one face (away     10°
@@ -115,8 +115,9 @@ SIGMAS = 3.0
 RESIDUAL_RHO = 0.3
 """A face whose tip centres miss its plane by more than this × the tip radius (RMS) is curved:
 1.5 mm for the 5 mm tip, three times the 0.5 mm noise and above a scanned box face's 0.4 mm."""
-SAGITTA_RHO = 0.2
-"""A face whose centres bend by more than this × the tip radius over the face is curved …"""
+SAGITTA_RHO = 0.5
+"""A face whose centres bend by more than this × the tip radius over the face is curved (as
+far as the split tolerance: two planes meeting at an edge inside one cluster bend less) …"""
 SAGITTA_FRACTION = 0.03
 """… and by more than this fraction of the face's extent (a cardboard bulge of 1 mm on a 10 cm
 face is 1 %; a cylinder's face seen by one sensor, 25° of arc, bends by 5.5 % of its width)."""
