@@ -12,8 +12,8 @@ the missing normal from outside the object), until
   (ending ``"closed"``), or
 * the budget (:class:`CompletionParams`: touches and path length spent by the completion)
   runs out (``"budget"``), or
-* what stayed open cannot be reached: every probe for it found nothing, or the way there was
-  blocked, :attr:`CompletionParams.attempts` times (``"unreachable"``).
+* what stayed open cannot be reached: :attr:`CompletionParams.attempts` probes for it found
+  nothing, were blocked on the way, or did not close it (``"unreachable"``).
 
 The record says which happened (``record.ending``, ``record.unreachable`` and a note). The
 controller computes no geometry: it carries out probes given as plain values; this module,
@@ -37,8 +37,9 @@ from typing import Any
 
 import numpy as np
 
-from tactile_kb.errors import UsageError
+from tactile_kb.errors import TactileKBError, UsageError
 from tactile_kb.model import ObjectModel, build_model
+from tactile_kb.planes import Face
 from tactile_kb.record import ExplorationRecord
 from tactile_kb.servo import Ending, Probe
 
@@ -47,6 +48,10 @@ __all__ = ["DEFAULT_COMPLETION", "CompletionParams", "ModelCompleter", "completi
 FloatArray = np.ndarray[Any, np.dtype[np.float64]]
 
 _SIDES = 8  # horizontal directions checked for a side never touched (every 45°)
+
+TOP_NZ = 0.8
+"""A face whose normal's z component is at least this is a top, probed from above when its tip
+centres lie along one line (:func:`completion_probes`)."""
 
 
 @dataclass(frozen=True)
@@ -60,8 +65,8 @@ class CompletionParams:
     path
         At most this much tip-centre path (metres) spent by the completion.
     attempts
-        Probes for one open item (a direction, a face) that find nothing before it counts as
-        unreachable.
+        Probes for one open item (a direction, a face) before it counts as unreachable (when
+        they found nothing, or what they found did not close it).
     height_gap
         Tip centres on a face lie at two heights when they span at least this much in z
         (metres); ``None``: half the tip radius.
@@ -99,7 +104,8 @@ def completion_probes(model: ObjectModel, *, height_gap: float | None = None) ->
       and name no direction, one per horizontal side (every 45°) and the top that no face
       faces yet. Directions under the object (the table's side) are not probed.
     * Closed: one probe per side face whose tip centres lie at one height, at the other end
-      of the face's height range (faces lower than the tip's diameter are left as they are).
+      of the face's height range (faces lower than the tip's diameter are left as they are),
+      and two from above beside a top whose tip centres lie along one line (a ridge).
     """
     record = model.record
     rho = record.tip_radius
@@ -145,6 +151,9 @@ def completion_probes(model: ObjectModel, *, height_gap: float | None = None) ->
             continue
         face = model.faces[index]
         n = np.asarray(face.normal, dtype=float)
+        if face.source == "contacts" and n[2] >= TOP_NZ:
+            probes += _top_probes(face, poly.vertices[list(verts)], centres, rho)
+            continue
         if face.source != "contacts" or abs(n[2]) > 0.9 or n[2] < -0.5:
             continue  # tops, the table, undersides: not probed at another height
         zs = centres[list(face.contacts), 2] if face.contacts else np.zeros(0)
@@ -177,6 +186,42 @@ def completion_probes(model: ObjectModel, *, height_gap: float | None = None) ->
             )
         )
     return probes
+
+
+def _top_probes(face: Face, ring: FloatArray, centres: FloatArray, rho: float) -> list[Probe]:
+    """Probes from above beside a top whose tip centres lie along one line.
+
+    A touch from above that lands on a ridge (a gabled carton's seal) slides along it, and the
+    line of tip centres fits any plane through the ridge: the top is not known until it is
+    touched off that line. Two probes, one each side of the line, halfway to the face's
+    border; none when the centres already span the face (more than ρ / 2 across the line).
+    """
+    pts = centres[list(face.contacts), :2] if face.contacts else np.zeros((0, 2))
+    if len(pts) < 2:
+        return []
+    mid = pts.mean(axis=0)
+    _, sv, vt = np.linalg.svd(pts - mid, full_matrices=False)
+    if len(sv) > 1 and sv[1] / math.sqrt(len(pts)) >= 0.5 * rho:
+        return []
+    across = np.array([-vt[0, 1], vt[0, 0]])
+    half = float(np.abs((ring[:, :2] - mid) @ across).max())
+    if half < rho:
+        return []
+    n = np.asarray(face.normal, dtype=float)
+    top = float(ring[:, 2].max()) + rho
+    reach = float(np.ptp(ring[:, 2])) + 4.0 * rho
+    out = []
+    for sign, side in ((1.0, "+"), (-1.0, "-")):
+        xy = mid + sign * 0.5 * half * across
+        out.append(
+            Probe(
+                (float(xy[0]), float(xy[1]), top),
+                (0.0, 0.0, 1.0),
+                reach,
+                f"the top facing {_name(n)} touched along one line ({side} side)",
+            )
+        )
+    return out
 
 
 def _section_point(ring: FloatArray, z: float) -> FloatArray | None:
@@ -222,7 +267,7 @@ class ModelCompleter:
     def __init__(self, params: CompletionParams | None = None) -> None:
         self.params = params or DEFAULT_COMPLETION
         self._start: tuple[int, float] | None = None
-        self._failed: Counter[str] = Counter()
+        self._tried: Counter[str] = Counter()
         self.probes = 0
 
     def next_probe(
@@ -231,14 +276,16 @@ class ModelCompleter:
         """The next probe for ``record``, or how the completion ended."""
         if self._start is None:
             self._start = (record.touches, record.path_length)
-        if last is not None and not last[1]:
-            self._failed[last[0].reason] += 1
-        model = build_model(record)
+        try:
+            model = build_model(record)
+        except (TactileKBError, np.linalg.LinAlgError, ValueError) as exc:
+            text = f"the model cannot be built after {record.touches} touches: {exc}"
+            return Ending("unreachable", text, (str(exc),))
         wanted = completion_probes(model, height_gap=self.params.height_gap)
         open_items = [p.reason for p in wanted]
         if model.polyhedron is None and not wanted:
             open_items = [model.open_reason or "the model is open"]
-        todo = [p for p in wanted if self._failed[p.reason] < self.params.attempts]
+        todo = [p for p in wanted if self._tried[p.reason] < self.params.attempts]
         touches = record.touches - self._start[0]
         path = record.path_length - self._start[1]
         if not open_items:
@@ -268,6 +315,7 @@ class ModelCompleter:
             )
         self.probes += 1
         probe = todo[0]
-        if probe.reason == "open towards +z" and self._failed[probe.reason]:
+        if probe.reason == "open towards +z" and self._tried[probe.reason]:
             probe = _over_the_rim(record, probe)
+        self._tried[probe.reason] += 1
         return probe

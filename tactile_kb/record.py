@@ -141,7 +141,7 @@ class ExplorationRecord(BaseModel):
         if self.ending in ("", "closed"):
             return ""
         what = {
-            "budget": "the completion budget ran out",
+            "budget": "the exploration's budget ran out",
             "unreachable": "what stayed open could not be reached",
         }.get(self.ending, f"the exploration ended ({self.ending})")
         still = "; ".join(self.unreachable) or "unknown"

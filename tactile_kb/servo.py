@@ -522,6 +522,10 @@ class Controller:
     def _complete(self, completer: Completer) -> None:
         """Carry out the probes ``completer`` asks for until it returns an :class:`Ending`."""
         last: tuple[Probe, bool] | None = None
+        if self.motions >= self.params.max_motions:
+            text = f"motion budget of {self.params.max_motions} exhausted before the completion"
+            self.ending = Ending("budget", text, (f"unknown ({text})",))
+            return
         while True:
             try:
                 nxt = completer.next_probe(self.record(complete=False), last)
@@ -531,8 +535,8 @@ class Controller:
                     return
                 last = (nxt, self.probe(nxt))
             except _Budget as exc:
-                text = f"{exc} during the completion ({self.touches} touches)"
-                self.ending = Ending("budget", text, ())
+                text = f"{exc} ({self.touches} touches): the model was not completed"
+                self.ending = Ending("budget", text, (f"unknown ({exc})",))
                 self._note(text)
                 return
 
@@ -549,6 +553,9 @@ class Controller:
         touch is followed by a short slide each way along the surface (more tip centres on it).
         """
         normal = _unit(np.asarray(p.normal, dtype=float))
+        if self.finger.nearest(_v3(-normal)) is None:
+            self._note(f"no sensor of finger {self.finger.name!r} faces a probe ({p.reason})")
+            return False
         target = np.asarray(p.target, dtype=float)
         hint = self.world.hint
         if p.middle:

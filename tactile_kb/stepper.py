@@ -459,7 +459,8 @@ class StepperWorld:
         def differ(idx: NDArray[np.intp]) -> NDArray[np.intp]:
             mid = 0.5 * (marks[idx] + marks[idx + 1])
             states = self._fired_many(a[None, :] + mid[:, None] * u[None, :])
-            return idx[(states != ref[None, :]).any(axis=1)]
+            hit: NDArray[np.intp] = idx[(states != ref[None, :]).any(axis=1)]
+            return hit
 
         stride = _DENSE_STRIDE if self._dense and len(gaps) > 2 * _DENSE_STRIDE else 1
         if stride == 1:

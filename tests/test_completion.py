@@ -110,7 +110,7 @@ def test_a_spent_budget_is_the_ending_with_its_touch_count() -> None:
     assert all(u.startswith(("open towards", "the face facing")) for u in rec.unreachable)
     assert len(set(rec.unreachable)) == len(rec.unreachable)
     assert rec.open_ending == (
-        f"the completion budget ran out after {rec.touches} touches; still open: "
+        f"the exploration's budget ran out after {rec.touches} touches; still open: "
         + "; ".join(rec.unreachable)
     )
     assert "complete" not in rec.contacts_per_phase
@@ -167,3 +167,23 @@ def test_completion_params_are_checked() -> None:
         CompletionParams(touches=-1)
     with pytest.raises(Exception, match="path"):
         CompletionParams(path=float("nan"))
+
+
+@pytest.mark.parametrize(
+    ("what", "text"),
+    [
+        ("plane", "v 0 0 0\nv 0.05 0 0\nv 0 0.05 0\nv 0.05 0.05 0\nf 1 2 3\nf 2 4 3\n"),
+        ("points", "v 0 0 0\nv 0.05 0 0\nv 0 0.05 0\nv 0 0 0.05\n"),
+    ],
+)
+def test_explore_refuses_what_is_not_a_solid_in_one_line(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], what: str, text: str
+) -> None:
+    path = tmp_path / f"{what}.obj"
+    path.write_text(text)
+    assert main(["explore", str(path), "--out", str(tmp_path / "r.json")]) == 1
+    err = capsys.readouterr().err
+    assert err.startswith(f"tactile-kb: error: {path}: ")
+    assert len(err.splitlines()) == 1
+    assert "internal error" not in err
+    assert not (tmp_path / "r.json").exists()
