@@ -27,6 +27,7 @@ from tactile_kb.features.builtin import (
     face_sagitta,
     feature_registry,
     get_feature,
+    interior_spread_deg,
     lateral_common_point,
     parallelism_table,
     perpendicularity_table,
@@ -34,6 +35,7 @@ from tactile_kb.features.builtin import (
     side_count,
 )
 from tactile_kb.geometry.model import ObjectModel, build_model
+from tactile_kb.record import ExplorationRecord
 from tactile_kb.touch.finger import builtin_finger
 from tactile_kb.touch.synthetic import sample_record
 
@@ -405,29 +407,44 @@ def test_base_and_lateral_edges_do_not_depend_on_the_resting_face(
         assert get_feature("lateral_faces_vertical").fn(model) is parallel
 
 
-def test_a_neighbouring_sensor_does_not_make_a_face_curved() -> None:
-    # a contact inside a face reporting a direction 12° off (the rim of an embossed letter,
-    # a rounded edge) is no evidence of curvature: its position lies on the plane
+def test_a_neighbouring_sensor_near_an_edge_does_not_make_a_face_curved() -> None:
+    # one contact of a face reports a direction 12° off: near the face's edge (a touch on a
+    # rounded edge) it is not evidence of curvature; well inside the face it is
     rec = sample_record(solids.box(0.08, 0.08, 0.08), FINGER, per_face=8, quantise=False, noise=0.0)
     model = build_model(rec)
     face = model.contact_faces[0]
-    i = face.contacts[0]
-    d = np.asarray(rec.contacts[i].direction)
-    tilt = np.cross(d, [0.0, 0.0, 1.0]) if abs(d[2]) < 0.9 else np.array([1.0, 0.0, 0.0])
-    turned = d * math.cos(math.radians(12)) + tilt / np.linalg.norm(tilt) * math.sin(
-        math.radians(12)
-    )
-    contacts = list(rec.contacts)
-    contacts[i] = contacts[i].model_copy(update={"direction": tuple(float(x) for x in turned)})
-    changed = build_model(rec.model_copy(update={"contacts": contacts}))
+    poly = model.polyhedron
+    assert poly is not None
+    fi = model.face_of.index(model.faces.index(face))
+    corners = poly.vertices[list(poly.faces[fi])]
+
+    def tilted(at: np.ndarray) -> ExplorationRecord:
+        i = face.contacts[0]
+        d = np.asarray(rec.contacts[i].direction)
+        tilt = np.cross(d, [0.0, 0.0, 1.0]) if abs(d[2]) < 0.9 else np.array([1.0, 0.0, 0.0])
+        turned = d * math.cos(math.radians(12)) + tilt / np.linalg.norm(tilt) * math.sin(
+            math.radians(12)
+        )
+        centre = at + FINGER.radius * face.normal_array
+        contacts = list(rec.contacts)
+        contacts[i] = contacts[i].model_copy(
+            update={
+                "direction": tuple(float(x) for x in turned),
+                "centre": tuple(float(x) for x in centre),
+                "point": tuple(float(x) for x in centre + FINGER.radius * turned),
+            }
+        )
+        return rec.model_copy(update={"contacts": contacts})
+
+    middle = corners.mean(axis=0)
+    near_edge = (corners[0] + corners[1]) / 2 + 0.001 * (middle - (corners[0] + corners[1]) / 2)
+    inside = build_model(tilted(middle))
+    at_edge = build_model(tilted(near_edge))
     assert not get_feature("surface_curved").fn(model)
-    assert not get_feature("surface_curved").fn(changed)
-    # but its centre off the plane by more than 0.3 ρ is
-    moved = list(contacts)
-    c = np.asarray(rec.contacts[i].centre) - 0.004 * face.normal_array
-    moved[i] = moved[i].model_copy(update={"centre": tuple(float(x) for x in c)})
-    off = build_model(rec.model_copy(update={"contacts": moved}))
-    assert get_feature("surface_curved").fn(off) or len(off.contact_faces) > 5
+    assert get_feature("surface_curved").fn(inside)
+    assert not get_feature("surface_curved").fn(inside, spread_deg=15.0)
+    assert not get_feature("surface_curved").fn(at_edge)
+    assert interior_spread_deg(inside) == pytest.approx(12.0, abs=0.5)
 
 
 def test_curvature_is_measured_over_the_face() -> None:

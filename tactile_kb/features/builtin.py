@@ -21,9 +21,11 @@ parameter                      meaning                                          
                                ``max(tolerance_deg, sigmas·√(u₁² + u₂²))``
 ``residual_tol``               RMS misfit (m) of a face's tip centres meaning       0.3 ρ, ≥ 3σ
                                curved (ρ the tip radius, σ the declared noise)
-``sagitta_tol``                bending (m) of a face's tip centres over the face    max(0.2 ρ,
+``sagitta_tol``                bending (m) of a face's tip centres over the face    max(0.5 ρ,
                                meaning curved (:func:`face_sagitta`)                3 % extent,
                                                                                     4σ)
+``spread_deg``                 directions of two contacts inside one face (away     10°
+                               from its edges) further apart mean curved
 ``smooth_deg``                 edges whose normals differ by less are "smooth"      35°
 ``min_smooth_edges``           that many smooth edges mean curved                   6
 ``rel_tol``                    relative spread of lengths counted as equal          0.06
@@ -95,6 +97,7 @@ __all__ = [
     "face_sagitta",
     "feature_registry",
     "get_feature",
+    "interior_spread_deg",
     "lateral_common_point",
     "lateral_edges",
     "measure",
@@ -113,11 +116,14 @@ SIGMAS = 3.0
 RESIDUAL_RHO = 0.3
 """A face whose tip centres miss its plane by more than this × the tip radius (RMS) is curved:
 1.5 mm for the 5 mm tip, three times the 0.5 mm noise and above a scanned box face's 0.4 mm."""
-SAGITTA_RHO = 0.2
-"""A face whose centres bend by more than this × the tip radius over the face is curved …"""
+SAGITTA_RHO = 0.5
+"""A face whose centres bend by more than this × the tip radius over the face is curved (as
+far as the split tolerance: two planes meeting at an edge inside one cluster bend less) …"""
 SAGITTA_FRACTION = 0.03
 """… and by more than this fraction of the face's extent (a cardboard bulge of 1 mm on a 10 cm
 face is 1 %; a cylinder's face seen by one sensor, 25° of arc, bends by 5.5 % of its width)."""
+SPREAD_DEG = 10.0
+"""Contacts inside one face whose directions differ by more than this mean curved."""
 MIN_SAGITTA_CONTACTS = 8
 """Fewer contacts on a face do not determine its bending (a quadric has six unknowns)."""
 SMOOTH_DEG = 35.0
@@ -160,6 +166,13 @@ class Feature:
 
 # ---------------------------------------------------------------------------------------------
 # geometry helpers (values, not booleans)
+
+
+def _edge_rounding() -> float:
+    """The edge rounding the model allows (imported when a feature runs: geometry is scipy)."""
+    from tactile_kb.geometry.planes import EDGE_ROUNDING
+
+    return EDGE_ROUNDING
 
 
 def _poly(model: ObjectModel, name: str) -> Polyhedron:
@@ -422,6 +435,7 @@ def surface_curved(
     smooth_deg: float = SMOOTH_DEG,
     min_smooth_edges: int = MIN_SMOOTH_EDGES,
     sagitta_tol: float | None = None,
+    spread_deg: float = SPREAD_DEG,
 ) -> bool:
     """The surface is curved: a face's tip centres miss its plane (RMS above ``residual_tol``)
     or bend over the face (sagitta above ``sagitta_tol``, :func:`face_sagitta`), or the
@@ -431,8 +445,11 @@ def surface_curved(
     Both tolerances are relative by default: :data:`RESIDUAL_RHO` × the tip radius, and the
     larger of :data:`SAGITTA_RHO` × the tip radius and :data:`SAGITTA_FRACTION` × the face's
     extent; never below 3 (residual) or 4 (sagitta) σ of the record's declared noise. Which
-    sensors fired does not matter: a touch near a (rounded) edge, or on the rim of an
-    embossed letter, fires a neighbouring sensor on any real box."""
+    sensors fired matters only inside a face: a touch near a (rounded) edge of any real box
+    fires a neighbouring sensor, so contacts of one face firing sensors more than
+    ``spread_deg`` apart mean curved only when both lie further than ρ·sin(spread) plus the
+    largest edge rounding (:data:`tactile_kb.geometry.planes.EDGE_ROUNDING` × the face's width) from
+    the face's edges (:func:`interior_spread_deg`)."""
     rho = model.record.tip_radius
     noise = model.record.noise
     res_tol = residual_tol if residual_tol is not None else max(RESIDUAL_RHO * rho, 3.0 * noise)
@@ -450,6 +467,8 @@ def surface_curved(
         )
         if sag > tol:
             return True
+    if interior_spread_deg(model) > spread_deg:
+        return True
     p = model.polyhedron
     cos_smooth = math.cos(math.radians(smooth_deg))
     if p is None:
@@ -463,6 +482,59 @@ def surface_curved(
         return int((c.max(axis=1) > cos_smooth).sum()) >= min_smooth_edges
     smooth = int((_edge_cosines(model, p) > cos_smooth).sum())
     return smooth >= min_smooth_edges
+
+
+def interior_spread_deg(model: ObjectModel) -> float:
+    """Largest angle (degrees) between the contact directions of two contacts of one
+    polyhedron face, both inside the face: further from each of its edges than ρ·sin of
+    their angle plus the edge rounding allowance (:data:`tactile_kb.geometry.planes.EDGE_ROUNDING` ×
+    the face's width). A plane fires the same sensors everywhere but near its edges; a
+    curved wall merged into one face fires several across it. 0 without a polyhedron."""
+    p = model.polyhedron
+    if p is None or not model.face_of:
+        return 0.0
+
+    def compute() -> float:
+        assert p is not None
+        worst = 0.0
+        contacts = model.record.contacts
+        rho = model.record.tip_radius
+        for fi, poly in enumerate(p.faces):
+            face = model.faces[model.face_of[fi]]
+            if len(face.contacts) < 2:
+                continue
+            v = p.vertices[list(poly)]
+            n = p.normals[fi]
+            c = np.asarray([contacts[i].centre for i in face.contacts], dtype=float)
+            d = np.asarray([contacts[i].direction for i in face.contacts], dtype=float)
+            d /= np.linalg.norm(d, axis=1)[:, None]
+            foot = c - np.outer(c @ n - p.offsets[fi], n)  # onto the face's plane
+            edge_dist = _polygon_edge_distance(foot, v, n)
+            centred = v - v.mean(axis=0)
+            _, _, vt = np.linalg.svd(centred, full_matrices=False)
+            width = float(np.ptp(centred @ vt[1]))
+            ang = np.degrees(np.arccos(np.clip(d @ d.T, -1.0, 1.0)))
+            band = rho * np.sin(np.radians(ang)) + _edge_rounding() * width
+            inside = (edge_dist[:, None] > band) & (edge_dist[None, :] > band)
+            if inside.any():
+                worst = max(worst, float(ang[inside].max()))
+        return worst
+
+    return model.derived((__name__, "interior_spread"), compute)
+
+
+def _polygon_edge_distance(
+    points: FloatArray, vertices: FloatArray, normal: FloatArray
+) -> FloatArray:
+    """Distance (m) of points in a face's plane to the nearest edge of the face's polygon."""
+    a = vertices
+    b = np.roll(vertices, -1, axis=0)
+    ab = b - a
+    t = np.clip(
+        np.einsum("pkj,kj->pk", points[:, None, :] - a[None], ab) / (ab * ab).sum(axis=1), 0, 1
+    )
+    closest = a[None] + t[..., None] * ab[None]
+    return np.asarray(np.linalg.norm(points[:, None, :] - closest, axis=2).min(axis=1))
 
 
 def face_sagitta(model: ObjectModel, face: Face) -> tuple[float, float] | None:
@@ -524,6 +596,7 @@ def surface_plane(
     smooth_deg: float = SMOOTH_DEG,
     min_smooth_edges: int = MIN_SMOOTH_EDGES,
     sagitta_tol: float | None = None,
+    spread_deg: float = SPREAD_DEG,
 ) -> bool:
     """The surface is plane: touched somewhere, and not curved (see ``surface_curved``)."""
     return contact(model) and not surface_curved(
@@ -532,6 +605,7 @@ def surface_plane(
         smooth_deg=smooth_deg,
         min_smooth_edges=min_smooth_edges,
         sagitta_tol=sagitta_tol,
+        spread_deg=spread_deg,
     )
 
 
