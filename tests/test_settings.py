@@ -229,3 +229,15 @@ def test_object_model_is_keyword_only() -> None:
     )
     assert rebuilt.open_reason == ""
     assert not hasattr(rebuilt, "_derived")
+
+
+def test_the_docs_table_is_the_one_the_model_generates() -> None:
+    from pathlib import Path
+
+    rows = ["| setting | default | meaning |", "|---|---|---|"]
+    for group in settings.Settings.model_fields:
+        values = getattr(settings.DEFAULTS, group)
+        for name, info in type(values).model_fields.items():
+            rows.append(f"| `{group}.{name}` | {getattr(values, name)!r} | {info.description} |")
+    text = (Path(__file__).parent.parent / "docs" / "settings.md").read_text(encoding="utf-8")
+    assert "\n".join(rows) in text
