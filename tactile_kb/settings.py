@@ -8,7 +8,8 @@ one for a block of code (thread- and task-safe: the settings live in a
         model = build_model(record)
 
 The groups follow the stages: :class:`WorldSettings` (the worlds' contact band),
-:class:`FingerSettings`, :class:`ServoSettings` (the controller), :class:`GeometrySettings`
+:class:`FingerSettings`, :class:`ServoSettings` (the controller), :class:`ExploreSettings`
+(the explorers' noise checks, the completion), :class:`GeometrySettings`
 (faces, polyhedron, layers), :class:`FeatureSettings` (the built-in predicates),
 :class:`GraspSettings` and :class:`ObjectSettings` (which meshes are accepted). Each field says
 its unit and meaning; values are validated (a tolerance is positive, a fraction below 1).
@@ -42,6 +43,7 @@ from tactile_kb.errors import UsageError
 
 __all__ = [
     "DEFAULTS",
+    "ExploreSettings",
     "FeatureSettings",
     "FingerSettings",
     "GeometrySettings",
@@ -122,6 +124,30 @@ class ServoSettings(_Group):
         lt=90,
         description="Degrees: a touch while riding over an irregularity whose sensors point this "
         "close to the surface's normal is the surface followed.",
+    )
+
+
+class ExploreSettings(_Group):
+    """The explorers and the model-driven completion of an exploration."""
+
+    noise_warn_fraction: float = Field(
+        0.2,
+        gt=0,
+        description="Fraction of the tip radius: a contact-position noise σ above this is warned "
+        "about (on the 5 mm tip, σ ≥ 1.5 mm makes flat faces read as curved).",
+    )
+    noise_object_fraction: float = Field(
+        0.03,
+        gt=0,
+        description="Fraction of the object's thinnest extent: a noise σ above this is noted in "
+        "the record.",
+    )
+    top_nz: float = Field(
+        0.8,
+        gt=0,
+        le=1,
+        description="A face whose normal's z component is at least this is a top, probed from "
+        "above when its tip centres lie along one line.",
     )
 
 
@@ -396,6 +422,7 @@ class Settings(BaseModel):
     world: WorldSettings = Field(default_factory=WorldSettings)
     finger: FingerSettings = Field(default_factory=FingerSettings)
     servo: ServoSettings = Field(default_factory=ServoSettings)
+    explore: ExploreSettings = Field(default_factory=ExploreSettings)
     geometry: GeometrySettings = Field(default_factory=GeometrySettings)
     features: FeatureSettings = Field(default_factory=FeatureSettings)
     grasp: GraspSettings = Field(default_factory=GraspSettings)
