@@ -473,7 +473,7 @@ def surface_curved(
     if min_smooth_edges is None:
         min_smooth_edges = current().features.min_smooth_edges
     rho = model.record.tip_radius
-    noise = float(model.record.params.get("noise", 0.0))
+    noise = model.record.noise
     res_tol = (
         residual_tol
         if residual_tol is not None
@@ -540,7 +540,7 @@ def face_sagitta(model: ObjectModel, face: Face) -> tuple[float, float] | None:
         xs, ys = x / extent, y / extent  # well-conditioned unknowns
         design = np.column_stack([xs * xs, xs * ys, ys * ys, xs, ys, np.ones_like(xs)])
         start = np.linalg.lstsq(design, h, rcond=None)[0]
-        scale = max(float(model.record.params.get("noise", 0.0)), 1e-4)
+        scale = max(model.record.noise, 1e-4)
         from scipy.optimize import least_squares  # scipy only when a feature runs
 
         fit = least_squares(lambda p: design @ p - h, start, loss="soft_l1", f_scale=scale)
