@@ -42,6 +42,7 @@ from tactile_kb.errors import TactileKBError, UsageError
 from tactile_kb.geometry.model import ObjectModel, build_model
 from tactile_kb.geometry.planes import Face
 from tactile_kb.record import ExplorationRecord
+from tactile_kb.settings import DEFAULTS, current
 from tactile_kb.touch.explorers import Explorer, WorldExplorer
 from tactile_kb.touch.servo import Ending, Probe
 from tactile_kb.types import FloatArray
@@ -57,7 +58,7 @@ __all__ = [
 
 _SIDES = 8  # horizontal directions checked for a side never touched (every 45°)
 
-TOP_NZ = 0.8
+TOP_NZ = DEFAULTS.explore.top_nz
 """A face whose normal's z component is at least this is a top, probed from above when its tip
 centres lie along one line (:func:`completion_probes`)."""
 
@@ -159,7 +160,7 @@ def completion_probes(model: ObjectModel, *, height_gap: float | None = None) ->
             continue
         face = model.faces[index]
         n = np.asarray(face.normal, dtype=float)
-        if face.source == "contacts" and n[2] >= TOP_NZ:
+        if face.source == "contacts" and n[2] >= current().explore.top_nz:
             probes += _top_probes(face, poly.vertices[list(verts)], centres, rho)
             continue
         if face.source != "contacts" or abs(n[2]) > 0.9 or n[2] < -0.5:

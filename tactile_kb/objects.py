@@ -28,6 +28,7 @@ import numpy as np
 import trimesh
 
 from tactile_kb.errors import ObjectError
+from tactile_kb.settings import DEFAULTS, current
 
 __all__ = [
     "MAX_SIZE",
@@ -49,17 +50,17 @@ ObjectLike = trimesh.Trimesh | str | Path
 
 OBJECT_SUFFIXES = (".stl", ".obj", ".ply")
 
-MAX_SIZE = 0.6
+MAX_SIZE = DEFAULTS.objects.max_size
 """Metres: the largest extent an object may have (the motors' range, 2–30 cm objects)."""
 
-MIN_SIZE = 0.002
+MIN_SIZE = DEFAULTS.objects.min_size
 """Metres: an object thinner than this in any direction is degenerate for a 5 mm tip."""
 
-THIN_FACTOR = 1.5
+THIN_FACTOR = DEFAULTS.objects.thin_factor
 """An object must be at least this many tip radii wide in every direction (:func:`check_thickness`);
 measured: a 5 mm tip classifies a 7.5 mm plate standing on its edge, not a 7 mm one."""
 
-SPECK_FRACTION = 0.1
+SPECK_FRACTION = DEFAULTS.objects.speck_fraction
 """A separate body whose bounding-box diagonal is under this fraction of the largest body's is a
 floating speck (scan debris): it is dropped with a note. Larger second bodies are refused."""
 
@@ -67,7 +68,7 @@ NOTES_KEY = "tactile_kb_notes"
 """Key of ``mesh.metadata`` under which :func:`load_object` lists what it changed (specks
 dropped, holes filled, an open mesh kept as it is); explorers copy them into the record."""
 
-WORKSPACE_HALF_WIDTH = 0.5
+WORKSPACE_HALF_WIDTH = DEFAULTS.objects.workspace_half_width
 """Metres: every point of the object must lie within this distance of the z axis in x and y."""
 
 
@@ -149,7 +150,7 @@ def check_thickness(mesh: trimesh.Trimesh, tip_radius: float, *, name: str = "<m
     tactile_kb.errors.ObjectError: plate.stl: too thin for the finger: 4 mm across at its thinnest, a tip of radius 5 mm needs at least 7.5 mm
     """
     width = min_width(mesh)
-    need = THIN_FACTOR * tip_radius
+    need = current().objects.thin_factor * tip_radius
     if width < need:
         raise ObjectError(
             f"{name}: too thin for the finger: {width * 1000:.3g} mm across at its thinnest, "
@@ -198,30 +199,30 @@ def load_object(obj: ObjectLike, *, name: str | None = None) -> trimesh.Trimesh:
     if int(mesh.body_count) > 1:
         mesh = _keep_largest(mesh, label, notes)
     extent = mesh.extents
-    if float(extent.min()) < MIN_SIZE:
+    if float(extent.min()) < current().objects.min_size:
         raise ObjectError(
             f"{label}: not a solid: {float(extent.min()) * 1000:.3g} mm thick "
-            f"(at least {MIN_SIZE * 1000:g} mm needed; a single plane, a line or a point set "
+            f"(at least {current().objects.min_size * 1000:g} mm needed; a single plane, a line or a point set "
             "cannot be touched all round): degenerate mesh"
         )
     if not mesh.is_watertight:
         mesh = _close(mesh, label, notes)
     solid = mesh if mesh.is_watertight else mesh.convex_hull
     volume = abs(float(solid.volume))
-    if volume < MIN_SIZE**3:
+    if volume < current().objects.min_size ** 3:
         raise ObjectError(f"{label}: not a solid: degenerate mesh with no volume")
-    if float(extent.max()) > MAX_SIZE:
+    if float(extent.max()) > current().objects.max_size:
         raise ObjectError(
             f"{label}: larger than the workspace: {float(extent.max()):.3g} m across "
-            f"(at most {MAX_SIZE:g} m; is the mesh in millimetres?)"
+            f"(at most {current().objects.max_size:g} m; is the mesh in millimetres?)"
         )
     lo, hi = mesh.bounds
     if (
         max(abs(float(lo[0])), abs(float(lo[1])), abs(float(hi[0])), abs(float(hi[1])))
-        > WORKSPACE_HALF_WIDTH
+        > current().objects.workspace_half_width
     ):
         raise ObjectError(
-            f"{label}: lies outside the workspace (|x|, |y| ≤ {WORKSPACE_HALF_WIDTH:g} m); "
+            f"{label}: lies outside the workspace (|x|, |y| ≤ {current().objects.workspace_half_width:g} m); "
             "move it near the origin"
         )
     if mesh.is_watertight and float(mesh.volume) < 0:
@@ -241,14 +242,14 @@ def _keep_largest(mesh: trimesh.Trimesh, label: str, notes: list[str]) -> trimes
     sizes = np.array([float(np.linalg.norm(b.extents)) for b in bodies])
     main = int(np.argmax(sizes))
     others = [k for k in range(len(bodies)) if k != main]
-    large = [k for k in others if sizes[k] >= SPECK_FRACTION * sizes[main]]
+    large = [k for k in others if sizes[k] >= current().objects.speck_fraction * sizes[main]]
     if large:
         raise ObjectError(
             f"{label}: the mesh holds {len(bodies)} separate bodies; explore one object at a time"
         )
     notes.append(
         f"{label}: {len(others)} floating speck(s) dropped (each under "
-        f"{SPECK_FRACTION:.0%} of the object's size); the largest body is explored"
+        f"{current().objects.speck_fraction:.0%} of the object's size); the largest body is explored"
     )
     kept: trimesh.Trimesh = bodies[main]
     return kept

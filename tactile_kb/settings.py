@@ -1,0 +1,495 @@
+"""Every tolerance of the pipeline in one typed, documented, overridable settings object.
+
+The stages read their tolerances from :func:`current` when they run, so a user can change
+one for a block of code (thread- and task-safe: the settings live in a
+:class:`contextvars.ContextVar`)::
+
+    with settings.override(geometry={"cut_deg": 12.0}):
+        model = build_model(record)
+
+The groups follow the stages: :class:`WorldSettings` (the worlds' contact band),
+:class:`FingerSettings`, :class:`ServoSettings` (the controller), :class:`ExploreSettings`
+(the explorers' noise checks, the completion), :class:`GeometrySettings`
+(faces, polyhedron, layers), :class:`FeatureSettings` (the built-in predicates),
+:class:`GraspSettings` and :class:`ObjectSettings` (which meshes are accepted). Each field says
+its unit and meaning; values are validated (a tolerance is positive, a fraction below 1).
+
+Examples
+--------
+>>> from tactile_kb import settings
+>>> settings.current().features.tolerance_deg
+5.0
+>>> with settings.override(features={"tolerance_deg": 2.0}) as s:
+...     s.features.tolerance_deg, settings.current().features.tolerance_deg
+(2.0, 2.0)
+>>> settings.current().features.tolerance_deg
+5.0
+>>> settings.override(features={"tolerance_deg": -1.0})
+Traceback (most recent call last):
+...
+tactile_kb.errors.UsageError: settings: features.tolerance_deg: Input should be greater than 0 (got -1.0)
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterator, Mapping
+from contextlib import AbstractContextManager, contextmanager
+from contextvars import ContextVar
+from typing import Any
+
+from pydantic import BaseModel, ConfigDict, Field, ValidationError
+
+from tactile_kb.errors import UsageError
+
+__all__ = [
+    "DEFAULTS",
+    "ExploreSettings",
+    "FeatureSettings",
+    "FingerSettings",
+    "GeometrySettings",
+    "GraspSettings",
+    "ObjectSettings",
+    "ServoSettings",
+    "Settings",
+    "WorldSettings",
+    "current",
+    "override",
+    "use",
+]
+
+
+class _Group(BaseModel):
+    model_config = ConfigDict(frozen=True, extra="forbid", validate_default=True)
+
+
+class WorldSettings(_Group):
+    """The contact band every world (analytic, MuJoCo) shares."""
+
+    contact_tol: float = Field(
+        1e-7,
+        gt=0,
+        description="Metres: the tip touches the object when its centre is within ρ + contact_tol of it.",
+    )
+    block_tol: float = Field(
+        1e-9,
+        gt=0,
+        description="Metres: a world blocks the tip where its distance to the object would drop "
+        "below ρ − block_tol.",
+    )
+    same_contact_deg: float = Field(
+        1.0,
+        gt=0,
+        lt=90,
+        description="Degrees: a contact on a triangle's side this close in direction to a contact "
+        "inside a face is the same contact (the analytic world).",
+    )
+
+
+class FingerSettings(_Group):
+    """What a finger layout must achieve."""
+
+    align_4_deg: float = Field(
+        10.0,
+        gt=0,
+        lt=90,
+        description="Degrees: the 4-sensor finger is meant for surfaces facing its sensors; a "
+        "surface turned further from its sensor is reported.",
+    )
+    max_usable_error_deg: float = Field(
+        25.0,
+        gt=0,
+        lt=90,
+        description="Degrees: the largest quantisation of a contact direction a layout may have "
+        "for the features to be decided reliably (the 33-sensor finger: 20.3°).",
+    )
+
+
+class ServoSettings(_Group):
+    """The controller that follows the surface."""
+
+    curved_run: int = Field(
+        3,
+        ge=1,
+        description="Edge touches in a row (each rolling off within edge_slide) that mean a "
+        "curved surface.",
+    )
+    ride_step: float = Field(
+        0.8,
+        gt=0,
+        description="Tip radii: how far a ride over an irregularity steps on before pressing back.",
+    )
+    ride_deg: float = Field(
+        20.0,
+        gt=0,
+        lt=90,
+        description="Degrees: a touch while riding over an irregularity whose sensors point this "
+        "close to the surface's normal is the surface followed.",
+    )
+
+
+class ExploreSettings(_Group):
+    """The explorers and the model-driven completion of an exploration."""
+
+    noise_warn_fraction: float = Field(
+        0.2,
+        gt=0,
+        description="Fraction of the tip radius: a contact-position noise σ above this is warned "
+        "about (on the 5 mm tip, σ ≥ 1.5 mm makes flat faces read as curved).",
+    )
+    noise_object_fraction: float = Field(
+        0.03,
+        gt=0,
+        description="Fraction of the object's thinnest extent: a noise σ above this is noted in "
+        "the record.",
+    )
+    top_nz: float = Field(
+        0.8,
+        gt=0,
+        le=1,
+        description="A face whose normal's z component is at least this is a top, probed from "
+        "above when its tip centres lie along one line.",
+    )
+
+
+class GeometrySettings(_Group):
+    """Faces from contacts, the enveloping polyhedron, layer sections and blocks."""
+
+    cut_deg: float = Field(
+        15.0,
+        gt=0,
+        lt=180,
+        description="Degrees: cut of the normal clustering when the record names no sensor "
+        "directions.",
+    )
+    split_tol: float = Field(
+        0.0025,
+        gt=0,
+        description="Metres: largest distance of a tip centre from its face's fitted plane before "
+        "the face is split (and the largest for two faces to merge as coplanar); records that "
+        "declare a larger noise use six times that.",
+    )
+    span: float = Field(
+        0.002,
+        gt=0,
+        description="Metres (RMS): centres span a face when their spread across the fitted line "
+        "is at least this.",
+    )
+    merge_deg: float = Field(
+        4.0,
+        gt=0,
+        lt=90,
+        description="Degrees: two faces whose normals differ by less than this may merge if "
+        "coplanar.",
+    )
+    table_tol: float = Field(
+        0.001,
+        gt=0,
+        description="Metres: contacts whose plane is the table top (normal within 10° of +z, "
+        "|offset| below this) are ignored.",
+    )
+    max_refine_deg: float = Field(
+        35.0,
+        gt=0,
+        lt=90,
+        description="Degrees: a fitted normal further than this from the contacts' sensor normal "
+        "is not trusted.",
+    )
+    edge_rounding: float = Field(
+        0.10,
+        ge=0,
+        lt=1,
+        description="Fraction: real edges are rounded with a radius up to this fraction of the "
+        "narrower of the two faces they join.",
+    )
+    edge_min_width: float = Field(
+        4.0,
+        gt=0,
+        description="Tip radii: edge faces are looked for only against faces at least this wide.",
+    )
+    edge_sigmas: float = Field(
+        2.0,
+        ge=0,
+        description="An edge face's penetration is allowed this many σ/√m of noise on top.",
+    )
+    merge_fraction: float = Field(
+        0.03,
+        gt=0,
+        lt=1,
+        description="Fraction of the object's diameter: vertices closer than this are merged.",
+    )
+    noisy_merge_fraction: float = Field(
+        0.05,
+        gt=0,
+        lt=1,
+        description="Fraction of the touched points' smallest extent: the vertex merge distance "
+        "when the record declares contact-position noise (if larger than merge_fraction's).",
+    )
+    collapse_sigmas: float = Field(
+        4.0,
+        gt=0,
+        description="Edges of a noisy model shorter than this many σ of their length are "
+        "collapsed.",
+    )
+    assumed_top_deg: float = Field(
+        10.0,
+        gt=0,
+        lt=90,
+        description="Degrees: an open model is closed by an assumed top when every open direction "
+        "is within this angle of +z.",
+    )
+    line_tol: float = Field(
+        0.004,
+        gt=0,
+        description="Metres: two touched lines of a layer within this distance (and plane_deg) "
+        "are the same plane.",
+    )
+    plane_deg: float = Field(
+        8.0,
+        gt=0,
+        lt=90,
+        description="Degrees: two touched lines of a layer within this angle (and line_tol) are "
+        "the same plane.",
+    )
+    span_2d: float = Field(
+        0.005,
+        gt=0,
+        description="Metres (RMS): a layer side's line is refined from its tip centres when they "
+        "spread this much.",
+    )
+    same_contour: float = Field(
+        0.05,
+        gt=0,
+        lt=1,
+        description="Fraction: consecutive layers form one block when their contours differ by "
+        "less than this fraction of the smaller one's area (symmetric difference).",
+    )
+    top_normal_deg: float = Field(
+        20.0,
+        gt=0,
+        lt=90,
+        description='Degrees: a contact whose normal is within this angle of "up" touched a top.',
+    )
+    section_tol: float = Field(
+        0.001,
+        gt=0,
+        description="Metres: gaps and obstacles thinner than this along a grasp line or between "
+        "layers are slivers of noise.",
+    )
+
+
+class FeatureSettings(_Group):
+    """The built-in feature predicates."""
+
+    tolerance_deg: float = Field(
+        5.0,
+        gt=0,
+        lt=90,
+        description="Degrees: faces and edges this close in angle are parallel or perpendicular "
+        "(widened by sigmas × the face normals' uncertainty).",
+    )
+    sigmas: float = Field(
+        3.0,
+        ge=0,
+        description="Standard deviations of the normals' uncertainty added to tolerance_deg.",
+    )
+    residual_rho: float = Field(
+        0.3,
+        gt=0,
+        description="Tip radii (RMS): a face whose tip centres miss its plane by more than this is "
+        "curved.",
+    )
+    sagitta_rho: float = Field(
+        0.5,
+        gt=0,
+        description="Tip radii: a face whose centres bend by more than this over the face (and "
+        "sagitta_fraction) is curved.",
+    )
+    sagitta_fraction: float = Field(
+        0.03,
+        gt=0,
+        lt=1,
+        description="Fraction of the face's extent: a face bending by more than this (and "
+        "sagitta_rho) is curved.",
+    )
+    spread_deg: float = Field(
+        10.0,
+        gt=0,
+        lt=180,
+        description="Degrees: two contacts inside one face (away from its edges) whose sensor "
+        "directions differ by more than this mean curved (a plane fires the same sensors "
+        "everywhere but near its edges).",
+    )
+    min_sagitta_contacts: int = Field(
+        8,
+        ge=6,
+        description="Fewer contacts on a face do not determine its bending (a quadric has six "
+        "unknowns).",
+    )
+    smooth_deg: float = Field(
+        35.0,
+        gt=0,
+        lt=180,
+        description="Degrees: polyhedron edges whose faces turn by less than this are smooth "
+        "(a tessellated curved surface).",
+    )
+    min_smooth_edges: int = Field(
+        6,
+        ge=1,
+        description="At least this many smooth edges make a curved surface.",
+    )
+    rel_tol: float = Field(
+        0.06,
+        gt=0,
+        lt=1,
+        description="Fraction: lengths this close relative to each other are equal (equal edges, "
+        "congruent faces).",
+    )
+    edge_sigmas: float = Field(
+        4.0,
+        ge=0,
+        description="Standard deviations: the range of a dozen edge lengths allowed by noise "
+        "(4·√2·σ is exceeded with a probability below 1 %).",
+    )
+    point_tol: float = Field(
+        0.05,
+        gt=0,
+        lt=1,
+        description="Fraction of the diameter: lateral faces whose planes meet within this of one "
+        "point share a common point.",
+    )
+    horizontal_deg: float = Field(
+        10.0,
+        gt=0,
+        lt=90,
+        description="Degrees: a face whose normal is within this of ±z is horizontal (a cap); "
+        "lateral faces are within this of horizontal normals.",
+    )
+
+
+class GraspSettings(_Group):
+    """The grasp planner."""
+
+    table_angle_deg: float = Field(
+        5.0,
+        gt=0,
+        lt=90,
+        description="Degrees: a face whose normal is within this of −z is the object's base on "
+        "the table.",
+    )
+    table_height_tol: float = Field(
+        0.002,
+        gt=0,
+        description="Metres: a base face this close to the table (z = 0) stands on it.",
+    )
+    rank_angle_step_deg: float = Field(
+        2.0,
+        gt=0,
+        description="Degrees: candidates whose planes' angles fall in the same step rank as "
+        "equally parallel.",
+    )
+
+
+class ObjectSettings(_Group):
+    """Which meshes the explorers accept."""
+
+    max_size: float = Field(
+        0.6,
+        gt=0,
+        description="Metres: the largest extent an object may have (the motors' range).",
+    )
+    min_size: float = Field(
+        0.002,
+        gt=0,
+        description="Metres: an object thinner than this in any direction is degenerate.",
+    )
+    thin_factor: float = Field(
+        1.5,
+        gt=0,
+        description="Tip radii: an object must be at least this wide in every direction.",
+    )
+    speck_fraction: float = Field(
+        0.1,
+        gt=0,
+        lt=1,
+        description="Fraction: a separate body whose bounding-box diagonal is under this fraction "
+        "of the largest body's is a floating speck and is dropped.",
+    )
+    workspace_half_width: float = Field(
+        0.5,
+        gt=0,
+        description="Metres: every point of the object must lie within this distance of the z "
+        "axis in x and y.",
+    )
+
+
+class Settings(BaseModel):
+    """All tolerances, one group per stage (see the module docstring)."""
+
+    model_config = ConfigDict(frozen=True, extra="forbid")
+
+    world: WorldSettings = Field(default_factory=WorldSettings)
+    finger: FingerSettings = Field(default_factory=FingerSettings)
+    servo: ServoSettings = Field(default_factory=ServoSettings)
+    explore: ExploreSettings = Field(default_factory=ExploreSettings)
+    geometry: GeometrySettings = Field(default_factory=GeometrySettings)
+    features: FeatureSettings = Field(default_factory=FeatureSettings)
+    grasp: GraspSettings = Field(default_factory=GraspSettings)
+    objects: ObjectSettings = Field(default_factory=ObjectSettings)
+
+    def replaced(self, **groups: Mapping[str, Any] | BaseModel) -> Settings:
+        """A copy with the fields named in ``groups`` changed, validated.
+
+        Each keyword is a group name; its value a mapping of field names to new values (or a
+        whole group model).
+
+        Raises
+        ------
+        UsageError
+            An unknown group or field, or a value out of range.
+        """
+        data = self.model_dump()
+        for name, change in groups.items():
+            if name not in data:
+                raise UsageError(f"settings: no group {name!r} (groups: {', '.join(sorted(data))})")
+            update = change.model_dump() if isinstance(change, BaseModel) else dict(change)
+            data[name] = {**data[name], **update}
+        try:
+            return Settings.model_validate(data)
+        except ValidationError as exc:
+            err = exc.errors()[0]
+            where = ".".join(str(p) for p in err["loc"])
+            raise UsageError(f"settings: {where}: {err['msg']} (got {err['input']!r})") from None
+
+
+DEFAULTS = Settings()
+"""The documented defaults."""
+
+_CURRENT: ContextVar[Settings] = ContextVar("tactile_kb_settings", default=DEFAULTS)
+
+
+def current() -> Settings:
+    """The settings in force in this thread or task (:data:`DEFAULTS` unless overridden)."""
+    return _CURRENT.get()
+
+
+@contextmanager
+def use(settings: Settings) -> Iterator[Settings]:
+    """Make ``settings`` the current settings inside the ``with`` block (this context only)."""
+    if not isinstance(settings, Settings):
+        raise UsageError(f"settings: expected a Settings object, got {type(settings).__name__}")
+    token = _CURRENT.set(settings)
+    try:
+        yield settings
+    finally:
+        _CURRENT.reset(token)
+
+
+def override(**groups: Mapping[str, Any] | BaseModel) -> AbstractContextManager[Settings]:
+    """A context manager: the current settings with ``groups`` changed (see
+    :meth:`Settings.replaced`), validated at once.
+
+    >>> with override(geometry={"cut_deg": 12.0}, objects={"max_size": 1.0}) as s:
+    ...     s.geometry.cut_deg, s.objects.max_size
+    (12.0, 1.0)
+    """
+    return use(current().replaced(**groups))

@@ -57,7 +57,7 @@ def test_non_convex_object_keeps_its_convex_envelope_and_layers() -> None:
 def test_derived_values_are_computed_once_per_model() -> None:
     import dataclasses
 
-    from tactile_kb.geometry.model import build_model
+    from tactile_kb.geometry.model import build_model, derived
     from tactile_kb.solids import box
     from tactile_kb.touch.finger import builtin_finger
     from tactile_kb.touch.synthetic import sample_record
@@ -69,11 +69,11 @@ def test_derived_values_are_computed_once_per_model() -> None:
         calls.append(1)
         return 42
 
-    assert model.derived(("test", "x"), compute) == 42
-    assert model.derived(("test", "x"), compute) == 42
+    assert derived(model, ("test", "x"), compute) == 42
+    assert derived(model, ("test", "x"), compute) == 42
     assert len(calls) == 1
     fresh = dataclasses.replace(model)
-    assert fresh.derived(("test", "x"), compute) == 42
+    assert derived(fresh, ("test", "x"), compute) == 42
     assert len(calls) == 2
 
 

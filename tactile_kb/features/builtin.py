@@ -68,16 +68,17 @@ from __future__ import annotations
 
 import inspect
 import math
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Hashable, Mapping
 from dataclasses import dataclass, field
 from importlib.metadata import entry_points
-from typing import TYPE_CHECKING, Any, Literal
+from typing import TYPE_CHECKING, Any, Literal, TypeVar
 
 import numpy as np
 from numpy.typing import NDArray
 
 from tactile_kb.errors import GeometryError, PluginError, UsageError
 from tactile_kb.plugins import Registry
+from tactile_kb.settings import DEFAULTS, current
 
 if TYPE_CHECKING:  # the geometry (scipy) is imported when a feature is evaluated, so that
     # checking a rule file's bindings stays light
@@ -111,29 +112,40 @@ __all__ = [
 
 FeatureFn = Callable[..., bool]
 
-TOLERANCE_DEG = 5.0
-SIGMAS = 3.0
-RESIDUAL_RHO = 0.3
+_T = TypeVar("_T")
+
+
+def _derived(model: ObjectModel, key: Hashable, compute: Callable[[], _T]) -> _T:
+    """:func:`tactile_kb.geometry.model.derived` (the geometry is imported when a feature is
+    evaluated). Every key here holds the feature settings in force, so an override of them
+    never reads a value derived under others."""
+    from tactile_kb.geometry.model import derived
+
+    return derived(model, key, compute)
+
+
+TOLERANCE_DEG = DEFAULTS.features.tolerance_deg
+SIGMAS = DEFAULTS.features.sigmas
+RESIDUAL_RHO = DEFAULTS.features.residual_rho
 """A face whose tip centres miss its plane by more than this × the tip radius (RMS) is curved:
 1.5 mm for the 5 mm tip, three times the 0.5 mm noise and above a scanned box face's 0.4 mm."""
-SAGITTA_RHO = 0.5
-"""A face whose centres bend by more than this × the tip radius over the face is curved (as
-far as the split tolerance: two planes meeting at an edge inside one cluster bend less) …"""
-SAGITTA_FRACTION = 0.03
+SAGITTA_RHO = DEFAULTS.features.sagitta_rho
+"""A face whose centres bend by more than this × the tip radius over the face is curved …"""
+SAGITTA_FRACTION = DEFAULTS.features.sagitta_fraction
 """… and by more than this fraction of the face's extent (a cardboard bulge of 1 mm on a 10 cm
 face is 1 %; a cylinder's face seen by one sensor, 25° of arc, bends by 5.5 % of its width)."""
-SPREAD_DEG = 10.0
+MIN_SAGITTA_CONTACTS = DEFAULTS.features.min_sagitta_contacts
+SPREAD_DEG = DEFAULTS.features.spread_deg
 """Contacts inside one face whose directions differ by more than this mean curved."""
-MIN_SAGITTA_CONTACTS = 8
 """Fewer contacts on a face do not determine its bending (a quadric has six unknowns)."""
-SMOOTH_DEG = 35.0
-MIN_SMOOTH_EDGES = 6
-REL_TOL = 0.06
-EDGE_SIGMAS = 4.0
+SMOOTH_DEG = DEFAULTS.features.smooth_deg
+MIN_SMOOTH_EDGES = DEFAULTS.features.min_smooth_edges
+REL_TOL = DEFAULTS.features.rel_tol
+EDGE_SIGMAS = DEFAULTS.features.edge_sigmas
 """The largest of a dozen edge differences is a range statistic: the range of 12 Gaussian
 lengths exceeds 4·√2·σ with a probability below 1 %."""
-POINT_TOL = 0.05
-HORIZONTAL_DEG = 10.0
+POINT_TOL = DEFAULTS.features.point_tol
+HORIZONTAL_DEG = DEFAULTS.features.horizontal_deg
 
 
 @dataclass(frozen=True)
@@ -168,13 +180,6 @@ class Feature:
 # geometry helpers (values, not booleans)
 
 
-def _edge_rounding() -> float:
-    """The edge rounding the model allows (imported when a feature runs: geometry is scipy)."""
-    from tactile_kb.geometry.planes import EDGE_ROUNDING
-
-    return EDGE_ROUNDING
-
-
 def _poly(model: ObjectModel, name: str) -> Polyhedron:
     if model.polyhedron is None:
         reason = model.open_reason or "no polyhedron"
@@ -197,7 +202,9 @@ def _tolerance(model: ObjectModel, tolerance_deg: float, sigmas: float) -> Float
         comb = np.sqrt(u[:, None] ** 2 + u[None, :] ** 2)
         return np.asarray(np.maximum(tolerance_deg, sigmas * comb), dtype=float)
 
-    return model.derived((__name__, "tolerance", tolerance_deg, sigmas), compute)
+    return _derived(
+        model, (__name__, current().features, "tolerance", tolerance_deg, sigmas), compute
+    )
 
 
 def _face_angles(model: ObjectModel) -> FloatArray:
@@ -206,7 +213,7 @@ def _face_angles(model: ObjectModel) -> FloatArray:
         c = np.clip(p.normals @ p.normals.T, -1.0, 1.0)
         return np.asarray(np.degrees(np.arccos(c)), dtype=float)
 
-    return model.derived((__name__, "face_angles"), compute)
+    return _derived(model, (__name__, current().features, "face_angles"), compute)
 
 
 def face_angles(model: ObjectModel) -> FloatArray:
@@ -223,7 +230,9 @@ def _parallelism(model: ObjectModel, tolerance_deg: float, sigmas: float) -> NDA
         ang = _face_angles(model)
         return np.asarray(180.0 - ang <= _tolerance(model, tolerance_deg, sigmas), dtype=bool)
 
-    return model.derived((__name__, "parallel", tolerance_deg, sigmas), compute)
+    return _derived(
+        model, (__name__, current().features, "parallel", tolerance_deg, sigmas), compute
+    )
 
 
 def _perpendicularity(model: ObjectModel, tolerance_deg: float, sigmas: float) -> NDArray[np.bool_]:
@@ -233,20 +242,30 @@ def _perpendicularity(model: ObjectModel, tolerance_deg: float, sigmas: float) -
             np.abs(ang - 90.0) <= _tolerance(model, tolerance_deg, sigmas), dtype=bool
         )
 
-    return model.derived((__name__, "perpendicular", tolerance_deg, sigmas), compute)
+    return _derived(
+        model, (__name__, current().features, "perpendicular", tolerance_deg, sigmas), compute
+    )
 
 
 def parallelism_table(
-    model: ObjectModel, *, tolerance_deg: float = TOLERANCE_DEG, sigmas: float = SIGMAS
+    model: ObjectModel, *, tolerance_deg: float | None = None, sigmas: float | None = None
 ) -> NDArray[np.bool_]:
     """(F, F) True where two faces are parallel (opposite normals within the tolerance)."""
+    if tolerance_deg is None:
+        tolerance_deg = current().features.tolerance_deg
+    if sigmas is None:
+        sigmas = current().features.sigmas
     return _parallelism(model, tolerance_deg, sigmas).copy()
 
 
 def perpendicularity_table(
-    model: ObjectModel, *, tolerance_deg: float = TOLERANCE_DEG, sigmas: float = SIGMAS
+    model: ObjectModel, *, tolerance_deg: float | None = None, sigmas: float | None = None
 ) -> NDArray[np.bool_]:
     """(F, F) True where two faces are perpendicular within the tolerance."""
+    if tolerance_deg is None:
+        tolerance_deg = current().features.tolerance_deg
+    if sigmas is None:
+        sigmas = current().features.sigmas
     return _perpendicularity(model, tolerance_deg, sigmas).copy()
 
 
@@ -285,7 +304,7 @@ def _caps(model: ObjectModel, name: str, horizontal_deg: float) -> tuple[set[int
                 at[v].append(f)
         for fs in at:
             touches[np.ix_(fs, fs)] = True
-        parallel = _parallelism(model, TOLERANCE_DEG, SIGMAS)
+        parallel = _parallelism(model, current().features.tolerance_deg, current().features.sigmas)
         pairs = [
             (f, g)
             for f, g in zip(*np.nonzero(np.triu(parallel, 1)), strict=True)
@@ -306,7 +325,7 @@ def _caps(model: ObjectModel, name: str, horizontal_deg: float) -> tuple[set[int
                 return {int(next(iter(b)))}, set()
         return base, top
 
-    return model.derived((__name__, "caps", horizontal_deg), compute)
+    return _derived(model, (__name__, current().features, "caps", horizontal_deg), compute)
 
 
 def _edges_parallel_apart_from(p: Polyhedron, cap: set[int]) -> bool:
@@ -323,7 +342,9 @@ def _edges_parallel_apart_from(p: Polyhedron, cap: set[int]) -> bool:
         return False
     d = p.vertices[e[:, 1]] - p.vertices[e[:, 0]]
     d /= np.linalg.norm(d, axis=1)[:, None]
-    return bool((np.abs(d @ d[0]) >= math.cos(math.radians(TOLERANCE_DEG))).all())
+    return bool(
+        (np.abs(d @ d[0]) >= math.cos(math.radians(current().features.tolerance_deg))).all()
+    )
 
 
 def _sides(model: ObjectModel, name: str, horizontal_deg: float) -> list[int]:
@@ -357,18 +378,22 @@ def _lateral(model: ObjectModel, name: str, horizontal_deg: float) -> _Lateral:
         d = d / np.linalg.norm(d, axis=1)[:, None]
         return _Lateral(edges, a, d)
 
-    return model.derived((__name__, "lateral", horizontal_deg), compute)
+    return _derived(model, (__name__, current().features, "lateral", horizontal_deg), compute)
 
 
 def lateral_edges(
-    model: ObjectModel, *, horizontal_deg: float = HORIZONTAL_DEG
+    model: ObjectModel, *, horizontal_deg: float | None = None
 ) -> list[tuple[int, int]]:
     """Edges (vertex index pairs) on neither the base nor a top face."""
+    if horizontal_deg is None:
+        horizontal_deg = current().features.horizontal_deg
     return list(_lateral(model, "lateral_edges", horizontal_deg).edges)
 
 
-def side_count(model: ObjectModel, *, horizontal_deg: float = HORIZONTAL_DEG) -> int:
+def side_count(model: ObjectModel, *, horizontal_deg: float | None = None) -> int:
     """Number of lateral faces (neither base nor top): n of an n-gonal prism, pyramid, frustum."""
+    if horizontal_deg is None:
+        horizontal_deg = current().features.horizontal_deg
     return len(_sides(model, "side_count", horizontal_deg))
 
 
@@ -392,24 +417,26 @@ def _common_point(model: ObjectModel, horizontal_deg: float) -> tuple[FloatArray
         miss = np.einsum("kij,kj->ki", proj, point[None, :] - a)
         return point, float(np.sqrt((miss**2).sum(axis=1).mean()))
 
-    return model.derived((__name__, "common_point", horizontal_deg), compute)
+    return _derived(model, (__name__, current().features, "common_point", horizontal_deg), compute)
 
 
 def lateral_common_point(
-    model: ObjectModel, *, horizontal_deg: float = HORIZONTAL_DEG
+    model: ObjectModel, *, horizontal_deg: float | None = None
 ) -> tuple[FloatArray, float] | None:
     """Least-squares common point of the lateral edge lines and its RMS miss distance (m).
 
     ``p = (Σ(I − ddᵀ))⁻¹ Σ(I − ddᵀ)a``; None when there are fewer than two lateral edges or
     the lines are (nearly) parallel, so that no finite point is determined.
     """
+    if horizontal_deg is None:
+        horizontal_deg = current().features.horizontal_deg
     found = _common_point(model, horizontal_deg)
     return None if found is None else (found[0].copy(), found[1])
 
 
 def _diameter(model: ObjectModel, name: str) -> float:
     p = _poly(model, name)
-    return model.derived((__name__, "diameter"), lambda: p.diameter)
+    return _derived(model, (__name__, current().features, "diameter"), lambda: p.diameter)
 
 
 def section_at(model: ObjectModel, z: float) -> FloatArray:
@@ -432,10 +459,10 @@ def surface_curved(
     model: ObjectModel,
     *,
     residual_tol: float | None = None,
-    smooth_deg: float = SMOOTH_DEG,
-    min_smooth_edges: int = MIN_SMOOTH_EDGES,
+    smooth_deg: float | None = None,
+    min_smooth_edges: int | None = None,
     sagitta_tol: float | None = None,
-    spread_deg: float = SPREAD_DEG,
+    spread_deg: float | None = None,
 ) -> bool:
     """The surface is curved: a face's tip centres miss its plane (RMS above ``residual_tol``)
     or bend over the face (sagitta above ``sagitta_tol``, :func:`face_sagitta`), or the
@@ -448,11 +475,21 @@ def surface_curved(
     sensors fired matters only inside a face: a touch near a (rounded) edge of any real box
     fires a neighbouring sensor, so contacts of one face firing sensors more than
     ``spread_deg`` apart mean curved only when both lie further than ρ·sin(spread) plus the
-    largest edge rounding (:data:`tactile_kb.geometry.planes.EDGE_ROUNDING` × the face's width) from
+    largest edge rounding (``geometry.edge_rounding`` (:mod:`tactile_kb.settings`) × the face's width) from
     the face's edges (:func:`interior_spread_deg`)."""
+    if smooth_deg is None:
+        smooth_deg = current().features.smooth_deg
+    if spread_deg is None:
+        spread_deg = current().features.spread_deg
+    if min_smooth_edges is None:
+        min_smooth_edges = current().features.min_smooth_edges
     rho = model.record.tip_radius
     noise = model.record.noise
-    res_tol = residual_tol if residual_tol is not None else max(RESIDUAL_RHO * rho, 3.0 * noise)
+    res_tol = (
+        residual_tol
+        if residual_tol is not None
+        else max(current().features.residual_rho * rho, 3.0 * noise)
+    )
     if any(f.refined and f.residual > res_tol for f in model.faces):
         return True
     for f in model.contact_faces:
@@ -463,7 +500,11 @@ def surface_curved(
         tol = (
             sagitta_tol
             if sagitta_tol is not None
-            else max(SAGITTA_RHO * rho, SAGITTA_FRACTION * extent, 4.0 * noise)
+            else max(
+                current().features.sagitta_rho * rho,
+                current().features.sagitta_fraction * extent,
+                4.0 * noise,
+            )
         )
         if sag > tol:
             return True
@@ -487,7 +528,7 @@ def surface_curved(
 def interior_spread_deg(model: ObjectModel) -> float:
     """Largest angle (degrees) between the contact directions of two contacts of one
     polyhedron face, both inside the face: further from each of its edges than ρ·sin of
-    their angle plus the edge rounding allowance (:data:`tactile_kb.geometry.planes.EDGE_ROUNDING` ×
+    their angle plus the edge rounding allowance (``geometry.edge_rounding`` (:mod:`tactile_kb.settings`) ×
     the face's width). A plane fires the same sensors everywhere but near its edges; a
     curved wall merged into one face fires several across it. 0 without a polyhedron."""
     p = model.polyhedron
@@ -514,13 +555,15 @@ def interior_spread_deg(model: ObjectModel) -> float:
             _, _, vt = np.linalg.svd(centred, full_matrices=False)
             width = float(np.ptp(centred @ vt[1]))
             ang = np.degrees(np.arccos(np.clip(d @ d.T, -1.0, 1.0)))
-            band = rho * np.sin(np.radians(ang)) + _edge_rounding() * width
+            band = rho * np.sin(np.radians(ang)) + current().geometry.edge_rounding * width
             inside = (edge_dist[:, None] > band) & (edge_dist[None, :] > band)
             if inside.any():
                 worst = max(worst, float(ang[inside].max()))
         return worst
 
-    return model.derived((__name__, "interior_spread"), compute)
+    return _derived(
+        model, (__name__, current().features, current().geometry, "interior_spread"), compute
+    )
 
 
 def _polygon_edge_distance(
@@ -548,7 +591,7 @@ def face_sagitta(model: ObjectModel, face: Face) -> tuple[float, float] | None:
     the quadric's departure from its best plane, and the extent is the contacts' largest
     spread in the face. A cylinder's face bends by ``w²/8R`` over a width ``w``.
     """
-    if len(face.contacts) < MIN_SAGITTA_CONTACTS or face.source != "contacts":
+    if len(face.contacts) < current().features.min_sagitta_contacts or face.source != "contacts":
         return None
 
     def compute() -> tuple[float, float]:
@@ -574,7 +617,7 @@ def face_sagitta(model: ObjectModel, face: Face) -> tuple[float, float] | None:
         dev = quad - lin @ np.linalg.lstsq(lin, quad, rcond=None)[0]
         return float(np.ptp(dev)), extent
 
-    return model.derived((__name__, "sagitta", face.contacts), compute)
+    return _derived(model, (__name__, current().features, "sagitta", face.contacts), compute)
 
 
 def _edge_cosines(model: ObjectModel, p: Polyhedron) -> FloatArray:
@@ -586,19 +629,23 @@ def _edge_cosines(model: ObjectModel, p: Polyhedron) -> FloatArray:
             np.einsum("ij,ij->i", p.normals[ef[:, 0]], p.normals[ef[:, 1]]), dtype=float
         )
 
-    return model.derived((__name__, "edge_cosines"), compute)
+    return _derived(model, (__name__, current().features, "edge_cosines"), compute)
 
 
 def surface_plane(
     model: ObjectModel,
     *,
     residual_tol: float | None = None,
-    smooth_deg: float = SMOOTH_DEG,
-    min_smooth_edges: int = MIN_SMOOTH_EDGES,
+    smooth_deg: float | None = None,
+    min_smooth_edges: int | None = None,
     sagitta_tol: float | None = None,
-    spread_deg: float = SPREAD_DEG,
+    spread_deg: float | None = None,
 ) -> bool:
     """The surface is plane: touched somewhere, and not curved (see ``surface_curved``)."""
+    if smooth_deg is None:
+        smooth_deg = current().features.smooth_deg
+    if min_smooth_edges is None:
+        min_smooth_edges = current().features.min_smooth_edges
     return contact(model) and not surface_curved(
         model,
         residual_tol=residual_tol,
@@ -612,11 +659,15 @@ def surface_plane(
 def lateral_edges_parallel(
     model: ObjectModel,
     *,
-    tolerance_deg: float = TOLERANCE_DEG,
-    horizontal_deg: float = HORIZONTAL_DEG,
+    tolerance_deg: float | None = None,
+    horizontal_deg: float | None = None,
     min_edges: int = 3,
 ) -> bool:
     """ "Vertical" (lateral) edges are parallel: all within ``tolerance_deg`` of their mean."""
+    if tolerance_deg is None:
+        tolerance_deg = current().features.tolerance_deg
+    if horizontal_deg is None:
+        horizontal_deg = current().features.horizontal_deg
     _, d = _lateral_lines(model, horizontal_deg)
     if len(d) < min_edges:
         return False
@@ -632,19 +683,27 @@ def _lateral_spread_deg(model: ObjectModel, horizontal_deg: float) -> float:
         axis = vecs[:, -1]
         return float(np.degrees(np.arccos(np.clip(np.abs(d @ axis).min(), -1.0, 1.0))))
 
-    return model.derived((__name__, "lateral_spread", horizontal_deg), compute)
+    return _derived(
+        model, (__name__, current().features, "lateral_spread", horizontal_deg), compute
+    )
 
 
 def lateral_edges_concurrent(
     model: ObjectModel,
     *,
-    point_tol: float = POINT_TOL,
-    tolerance_deg: float = TOLERANCE_DEG,
-    horizontal_deg: float = HORIZONTAL_DEG,
+    point_tol: float | None = None,
+    tolerance_deg: float | None = None,
+    horizontal_deg: float | None = None,
     min_edges: int = 3,
 ) -> bool:
     """ "Vertical" edges join at one point: their least-squares common point misses each line
     by at most ``point_tol`` × the object's diameter (RMS), and they are not parallel."""
+    if point_tol is None:
+        point_tol = current().features.point_tol
+    if tolerance_deg is None:
+        tolerance_deg = current().features.tolerance_deg
+    if horizontal_deg is None:
+        horizontal_deg = current().features.horizontal_deg
     _, d = _lateral_lines(model, horizontal_deg)
     if len(d) < min_edges or lateral_edges_parallel(
         model, tolerance_deg=tolerance_deg, horizontal_deg=horizontal_deg, min_edges=min_edges
@@ -680,10 +739,14 @@ def parallel_face_pairs(
     *,
     count: int | None = 3,
     min: int | None = None,
-    tolerance_deg: float = TOLERANCE_DEG,
-    sigmas: float = SIGMAS,
+    tolerance_deg: float | None = None,
+    sigmas: float | None = None,
 ) -> bool:
     """Exactly ``count`` (or at least ``min``) pairs of parallel faces exist."""
+    if tolerance_deg is None:
+        tolerance_deg = current().features.tolerance_deg
+    if sigmas is None:
+        sigmas = current().features.sigmas
     table = _parallelism(model, tolerance_deg, sigmas)
     pairs = int(np.triu(table, 1).sum())
     if min is not None:
@@ -692,9 +755,13 @@ def parallel_face_pairs(
 
 
 def adjacent_faces_perpendicular(
-    model: ObjectModel, *, tolerance_deg: float = TOLERANCE_DEG, sigmas: float = SIGMAS
+    model: ObjectModel, *, tolerance_deg: float | None = None, sigmas: float | None = None
 ) -> bool:
     """Every two faces that share an edge are perpendicular."""
+    if tolerance_deg is None:
+        tolerance_deg = current().features.tolerance_deg
+    if sigmas is None:
+        sigmas = current().features.sigmas
     p = _poly(model, "adjacent_faces_perpendicular")
     table = _perpendicularity(model, tolerance_deg, sigmas)
     ef = np.asarray(p.edge_faces, dtype=int).reshape(-1, 2)
@@ -730,7 +797,7 @@ def _edge_sigmas(model: ObjectModel) -> FloatArray:
         c = cov[e[:, 0]] + cov[e[:, 1]]
         return np.asarray(np.sqrt(np.einsum("ei,eij,ej->e", u, c, u)), dtype=float)
 
-    return model.derived((__name__, "edge_sigmas"), compute)
+    return _derived(model, (__name__, current().features, "edge_sigmas"), compute)
 
 
 def edge_uncertainties(model: ObjectModel) -> FloatArray:
@@ -745,17 +812,21 @@ def edge_uncertainties(model: ObjectModel) -> FloatArray:
 
 
 def equal_edges(
-    model: ObjectModel, *, rel_tol: float = REL_TOL, sigmas: float = EDGE_SIGMAS
+    model: ObjectModel, *, rel_tol: float | None = None, sigmas: float | None = None
 ) -> bool:
     """Distances between neighbouring vertices are equal: every two edge lengths differ by at
     most ``max(rel_tol · mean, sigmas · √(σ₁² + σ₂²))``, σ from :func:`edge_uncertainties`.
 
     False on a model closed by an assumed top (``model.assumed_top``): the lateral edges'
     true length is unknown."""
+    if rel_tol is None:
+        rel_tol = current().features.rel_tol
+    if sigmas is None:
+        sigmas = current().features.edge_sigmas
     p = _poly(model, "equal_edges")
     if model.assumed_top is not None:
         return False
-    lengths = model.derived((__name__, "edge_lengths"), p.edge_lengths)
+    lengths = _derived(model, (__name__, current().features, "edge_lengths"), p.edge_lengths)
     sig = _edge_sigmas(model)
     diff = np.abs(lengths[:, None] - lengths[None, :])
     allowed = np.maximum(
@@ -790,26 +861,36 @@ def _congruence(p: Polyhedron) -> tuple[bool, float, float, float]:
 
 
 def congruent_faces(
-    model: ObjectModel, *, rel_tol: float = REL_TOL, tolerance_deg: float = TOLERANCE_DEG
+    model: ObjectModel, *, rel_tol: float | None = None, tolerance_deg: float | None = None
 ) -> bool:
     """All faces are congruent: same number of sides, side lengths and angles (False on a
     model closed by an assumed top, whose lateral faces' height is unknown)."""
+    if rel_tol is None:
+        rel_tol = current().features.rel_tol
+    if tolerance_deg is None:
+        tolerance_deg = current().features.tolerance_deg
     p = _poly(model, "congruent_faces")
     if model.assumed_top is not None:
         return False
-    same, dl, da, scale = model.derived((__name__, "congruence"), lambda: _congruence(p))
+    same, dl, da, scale = _derived(
+        model, (__name__, current().features, "congruence"), lambda: _congruence(p)
+    )
     return same and not (dl > rel_tol * scale or da > tolerance_deg)
 
 
-def top_face(model: ObjectModel, *, horizontal_deg: float = HORIZONTAL_DEG) -> bool:
+def top_face(model: ObjectModel, *, horizontal_deg: float | None = None) -> bool:
     """A top face parallel to the base exists (the base: the table face, or a prism's or a
     frustum's end when it lies on a side)."""
+    if horizontal_deg is None:
+        horizontal_deg = current().features.horizontal_deg
     _, top = _caps(model, "top_face", horizontal_deg)
     return bool(top)
 
 
-def lateral_faces_triangles(model: ObjectModel, *, horizontal_deg: float = HORIZONTAL_DEG) -> bool:
+def lateral_faces_triangles(model: ObjectModel, *, horizontal_deg: float | None = None) -> bool:
     """Every lateral face (neither base nor top) is a triangle."""
+    if horizontal_deg is None:
+        horizontal_deg = current().features.horizontal_deg
     p = _poly(model, "lateral_faces_triangles")
     sides = _sides(model, "lateral_faces_triangles", horizontal_deg)
     return bool(sides) and all(len(p.faces[f]) == 3 for f in sides)
@@ -818,10 +899,14 @@ def lateral_faces_triangles(model: ObjectModel, *, horizontal_deg: float = HORIZ
 def lateral_faces_vertical(
     model: ObjectModel,
     *,
-    tolerance_deg: float = TOLERANCE_DEG,
-    horizontal_deg: float = HORIZONTAL_DEG,
+    tolerance_deg: float | None = None,
+    horizontal_deg: float | None = None,
 ) -> bool:
     """Every lateral face is "vertical": perpendicular to the base within ``tolerance_deg``."""
+    if tolerance_deg is None:
+        tolerance_deg = current().features.tolerance_deg
+    if horizontal_deg is None:
+        horizontal_deg = current().features.horizontal_deg
     p = _poly(model, "lateral_faces_vertical")
     sides = _sides(model, "lateral_faces_vertical", horizontal_deg)
     base, _ = _caps(model, "lateral_faces_vertical", horizontal_deg)
@@ -841,13 +926,17 @@ def convex(model: ObjectModel) -> bool:
 
 
 def orthogonal_faces(
-    model: ObjectModel, *, tolerance_deg: float = TOLERANCE_DEG, sigmas: float = SIGMAS
+    model: ObjectModel, *, tolerance_deg: float | None = None, sigmas: float | None = None
 ) -> bool:
     """Every two faces of the object are parallel or perpendicular (all its faces, the concave
     ones and the table too, not only the envelope's): a box, or with ``convex`` false an
     object composed of rectangular parallelepipeds. Two normals count as parallel or
     perpendicular within ``max(tolerance_deg, sigmas · √(u₁² + u₂²))``, u the faces' normal
     uncertainties."""
+    if tolerance_deg is None:
+        tolerance_deg = current().features.tolerance_deg
+    if sigmas is None:
+        sigmas = current().features.sigmas
 
     def compute() -> bool:
         n = np.asarray([f.normal for f in model.faces], dtype=float).reshape(-1, 3)
@@ -859,7 +948,9 @@ def orthogonal_faces(
         off = np.minimum(np.minimum(ang, 180.0 - ang), np.abs(ang - 90.0))
         return bool((off <= tol).all())
 
-    return model.derived((__name__, "orthogonal_faces", tolerance_deg, sigmas), compute)
+    return _derived(
+        model, (__name__, current().features, "orthogonal_faces", tolerance_deg, sigmas), compute
+    )
 
 
 # ---------------------------------------------------------------------------------------------

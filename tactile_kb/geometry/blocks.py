@@ -17,6 +17,7 @@ import shapely
 import shapely.geometry
 
 from tactile_kb.geometry.model import ObjectModel
+from tactile_kb.settings import DEFAULTS, current
 from tactile_kb.types import FloatArray, vec3
 
 __all__ = [
@@ -28,14 +29,14 @@ __all__ = [
     "section_solid",
 ]
 
-SAME_CONTOUR = 0.05
+SAME_CONTOUR = DEFAULTS.geometry.same_contour
 """Consecutive layers form one block when their contours differ by less than this fraction of
 the smaller one's area (symmetric difference)."""
 
-TOP_NORMAL_DEG = 20.0
+TOP_NORMAL_DEG = DEFAULTS.geometry.top_normal_deg
 """A contact whose normal is within this angle of "up" touched a top."""
 
-SECTION_TOL = 0.001
+SECTION_TOL = DEFAULTS.geometry.section_tol
 """Gaps and obstacles thinner than this (m) along the grasp line are slivers of noise."""
 
 
@@ -189,14 +190,14 @@ def section_solid(model: ObjectModel) -> SectionSolid | None:
     if not layers:
         return None
     top_layer = layers[-1][1]
-    cos_up = math.cos(math.radians(TOP_NORMAL_DEG))
+    cos_up = math.cos(math.radians(current().geometry.top_normal_deg))
     tops = [c.point[2] for c in model.record.contacts if c.normal[2] >= cos_up]
-    touched = [z for z in tops if z > top_layer + SECTION_TOL]
+    touched = [z for z in tops if z > top_layer + current().geometry.section_tol]
     height = max(touched) if touched else top_layer
     groups: list[list[tuple[int, float, FloatArray]]] = [[layers[0]]]
     for item in layers[1:]:
         a, b = shapely.Polygon(groups[-1][-1][2]), shapely.Polygon(item[2])
-        if a.symmetric_difference(b).area <= SAME_CONTOUR * min(a.area, b.area):
+        if a.symmetric_difference(b).area <= current().geometry.same_contour * min(a.area, b.area):
             groups[-1].append(item)
         else:
             groups.append([item])

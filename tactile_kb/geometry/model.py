@@ -38,29 +38,28 @@ Examples
 from __future__ import annotations
 
 import math
+import weakref
 from collections.abc import Callable, Hashable
 from dataclasses import dataclass, field
-from typing import Any, TypeVar, cast
+from typing import Any, Literal, TypeVar, cast
 
 import numpy as np
 
 from tactile_kb.errors import GeometryError, OpenModelError, UsageError
 from tactile_kb.geometry.planes import (
-    DEFAULT_SPLIT_TOL,
-    EDGE_ROUNDING,
     Face,
     contact_arrays,
     edge_faces,
     merge_plane_arrays,
 )
 from tactile_kb.geometry.polyhedron import (
-    DEFAULT_MERGE_FRACTION,
     Polyhedron,
     collapse_short_edges,
     polyhedron_from_planes,
 )
 from tactile_kb.geometry.sections import LayerSection, distinct_planes, layer_sections
 from tactile_kb.record import ExplorationRecord
+from tactile_kb.settings import DEFAULTS, current
 from tactile_kb.types import FloatArray
 
 __all__ = [
@@ -69,19 +68,20 @@ __all__ = [
     "NOISY_MERGE_FRACTION",
     "ObjectModel",
     "build_model",
+    "derived",
 ]
 
-ASSUMED_TOP_DEG = 10.0
+ASSUMED_TOP_DEG = DEFAULTS.geometry.assumed_top_deg
 """An open model is closed by an assumed top when every open direction is within this angle
 (degrees) of +z."""
 
-NOISY_MERGE_FRACTION = 0.05
+NOISY_MERGE_FRACTION = DEFAULTS.geometry.noisy_merge_fraction
 """Vertex merge fraction of the object's smallest extent when the record declares
 contact-position noise: four or more noisy planes meeting at one vertex (an octahedron's)
 leave a gap of 3.5–5 % of an edge. Of the smallest extent, not the diameter: a thin
 heptagonal prism 29 cm tall has 1.1 cm edges (4 % of its diameter)."""
 
-COLLAPSE_SIGMAS = 4.0
+COLLAPSE_SIGMAS = DEFAULTS.geometry.collapse_sigmas
 """Edges of a noisy model shorter than this many σ of their length are collapsed: four noisy
 planes meeting at an octahedron's vertex split it into two joined by an edge of 1–4 mm
 (2–4 σ), while the shortest real edges of the test families are more than 5 σ long."""
@@ -89,7 +89,7 @@ planes meeting at an octahedron's vertex split it into two joined by an edge of 
 T = TypeVar("T")
 
 
-@dataclass(frozen=True, eq=False)
+@dataclass(frozen=True, eq=False, kw_only=True)
 class ObjectModel:
     """What the touch told: the record, its faces, the enveloping polyhedron, the layers.
 
@@ -125,32 +125,6 @@ class ObjectModel:
     closed at the highest touched point (its :class:`Face` has ``source == "assumed"`` and
     comes last in ``faces``); None when every face was touched. The true top is at least
     this high."""
-    _derived: dict[Hashable, Any] = field(
-        default_factory=dict, init=False, repr=False, compare=False
-    )
-
-    def derived(self, key: Hashable, compute: Callable[[], T]) -> T:
-        """``compute()``, evaluated once per model and ``key``: a value derived from the model.
-
-        The model is immutable, so feature extractors share what they derive from it (face
-        angles, lateral edges, …) instead of computing it again for every proposition. The key
-        must name everything the value depends on besides the model (e.g. a tolerance), and
-        begin with the caller's module name, so that two modules never share a key.
-
-        Examples
-        --------
-        >>> from tactile_kb.record import ExplorationRecord
-        >>> model = build_model(ExplorationRecord())
-        >>> model.derived((__name__, "answer"), lambda: 42)
-        42
-        >>> model.derived((__name__, "answer"), lambda: 0)  # computed once per model
-        42
-        """
-        try:
-            return cast(T, self._derived[key])
-        except KeyError:
-            value = self._derived[key] = compute()
-            return value
 
     @property
     def convex(self) -> bool:
@@ -177,13 +151,13 @@ def build_model(
     *,
     cut_deg: float | None = None,
     split_tol: float | None = None,
-    merge_fraction: float = DEFAULT_MERGE_FRACTION,
+    merge_fraction: float | None = None,
     include_table: bool = True,
     support_tol: float | None = None,
     open_factor: float = 3.0,
     assume_top: bool = False,
-    collapse_sigmas: float | None = COLLAPSE_SIGMAS,
-    edge_rounding: float | None = EDGE_ROUNDING,
+    collapse_sigmas: float | Literal["settings"] | None = "settings",
+    edge_rounding: float | Literal["settings"] | None = "settings",
 ) -> ObjectModel:
     """Build the :class:`ObjectModel` of ``record``.
 
@@ -194,8 +168,9 @@ def build_model(
     cut_deg, split_tol
         Passed to :func:`tactile_kb.geometry.planes.merge_planes`.
     merge_fraction
-        Passed to :func:`tactile_kb.geometry.polyhedron.polyhedron_from_planes`. When
-        ``record.noise`` is positive and this is the default, vertices merge within
+        Passed to :func:`tactile_kb.geometry.polyhedron.polyhedron_from_planes`; None: the
+        settings' ``geometry.merge_fraction``. When ``record.noise`` is positive and this is
+        None, vertices merge within
         :data:`NOISY_MERGE_FRACTION` × the touched points' smallest extent if that is larger
         (``options["merge_tol"]``).
     include_table
@@ -214,11 +189,13 @@ def build_model(
     collapse_sigmas
         When ``record.noise`` is positive, polyhedron edges shorter than this many
         σ of their length (from the faces' uncertainties) are collapsed into a vertex
-        (:func:`tactile_kb.geometry.polyhedron.collapse_short_edges`); None never collapses.
+        (:func:`tactile_kb.geometry.polyhedron.collapse_short_edges`); None never collapses;
+        ``"settings"``: the settings' ``geometry.collapse_sigmas``.
     edge_rounding
         Faces made of touches of the other faces' (sharp or rounded) edges are dropped
         (:func:`tactile_kb.geometry.planes.edge_faces` with this ``rounding``); their contacts are
-        listed in ``options["edge_contacts"]``. None keeps every face.
+        listed in ``options["edge_contacts"]``. None keeps every face; ``"settings"``: the
+        settings' ``geometry.edge_rounding``.
 
     Returns
     -------
@@ -228,6 +205,14 @@ def build_model(
     """
     if not isinstance(record, ExplorationRecord):
         raise UsageError(f"build_model needs an ExplorationRecord, got {type(record).__name__}")
+    geo = current().geometry
+    if collapse_sigmas == "settings":
+        collapse_sigmas = geo.collapse_sigmas
+    if edge_rounding == "settings":
+        edge_rounding = geo.edge_rounding
+    noisy_merge = merge_fraction is None
+    if merge_fraction is None:
+        merge_fraction = geo.merge_fraction
     arrays = contact_arrays(record.contacts)
     faces = merge_plane_arrays(
         record,
@@ -238,9 +223,7 @@ def build_model(
         include_table=include_table,
     )
     noise = record.noise
-    tol = (
-        support_tol if support_tol is not None else max(split_tol or DEFAULT_SPLIT_TOL, 6.0 * noise)
-    )
+    tol = support_tol if support_tol is not None else max(split_tol or geo.split_tol, 6.0 * noise)
     points, normals, offsets, supporting = _support(arrays[0], record.tip_radius, faces, tol)
     edge_contacts: tuple[int, ...] = ()
     if edge_rounding is not None and len(faces) >= 5:
@@ -267,8 +250,8 @@ def build_model(
     layers = layer_sections(record)
     kept = [i for i, s in enumerate(supporting) if s]
     merge_tol = None
-    if noise > 0 and merge_fraction == DEFAULT_MERGE_FRACTION and len(points) >= 4:
-        merge_tol = _noisy_merge_tol(points, merge_fraction)
+    if noise > 0 and noisy_merge and len(points) >= 4:
+        merge_tol = _noisy_merge_tol(points, merge_fraction, geo.noisy_merge_fraction)
         options["merge_tol"] = merge_tol
 
     off_sigma = np.asarray([f.offset_uncertainty for f in faces], dtype=float)
@@ -295,7 +278,14 @@ def build_model(
 
     def still_open(exc: OpenModelError) -> ObjectModel:
         return ObjectModel(
-            record, faces, None, tuple(supporting), str(exc), exc.open_directions, layers, options
+            record=record,
+            faces=faces,
+            polyhedron=None,
+            supporting=tuple(supporting),
+            open_reason=str(exc),
+            open_directions=exc.open_directions,
+            layers=layers,
+            options=options,
         )
 
     try:
@@ -314,12 +304,35 @@ def build_model(
         kept.append(len(faces) - 1)
         face_of = tuple(kept[p] for p in poly.plane_index)
         return ObjectModel(
-            record, faces, poly, tuple(supporting), "", [], layers, options, face_of, top
+            record=record,
+            faces=faces,
+            polyhedron=poly,
+            supporting=tuple(supporting),
+            layers=layers,
+            options=options,
+            face_of=face_of,
+            assumed_top=top,
         )
     except GeometryError as exc:
-        return ObjectModel(record, faces, None, tuple(supporting), str(exc), [], layers, options)
+        return ObjectModel(
+            record=record,
+            faces=faces,
+            polyhedron=None,
+            supporting=tuple(supporting),
+            open_reason=str(exc),
+            layers=layers,
+            options=options,
+        )
     face_of = tuple(kept[p] for p in poly.plane_index)
-    return ObjectModel(record, faces, poly, tuple(supporting), "", [], layers, options, face_of)
+    return ObjectModel(
+        record=record,
+        faces=faces,
+        polyhedron=poly,
+        supporting=tuple(supporting),
+        layers=layers,
+        options=options,
+        face_of=face_of,
+    )
 
 
 def _support(
@@ -339,22 +352,24 @@ def _support(
 
 def _only_upwards(directions: list[tuple[float, float, float]]) -> bool:
     """True when ``directions`` is not empty and each is within :data:`ASSUMED_TOP_DEG` of +z."""
-    c = math.cos(math.radians(ASSUMED_TOP_DEG))
+    c = math.cos(math.radians(current().geometry.assumed_top_deg))
     return bool(directions) and all(
         d[2] >= c * math.sqrt(d[0] ** 2 + d[1] ** 2 + d[2] ** 2) for d in directions
     )
 
 
-def _noisy_merge_tol(points: np.ndarray[Any, np.dtype[np.float64]], fraction: float) -> float:
+def _noisy_merge_tol(
+    points: np.ndarray[Any, np.dtype[np.float64]], fraction: float, noisy_fraction: float
+) -> float:
     """The vertex merge distance (m) for a noisy record: ``fraction`` × the touched points'
-    largest extent, or :data:`NOISY_MERGE_FRACTION` × their smallest extent (along their
+    largest extent, or ``noisy_fraction`` (:data:`NOISY_MERGE_FRACTION`) × their smallest extent (along their
     principal axes) if that is larger. Four noisy planes meeting at one vertex of a compact
     object (an octahedron) split it by 3.5–5 % of an edge; an elongated object (a thin prism)
     has short edges across its length, which its smallest extent protects."""
     centred = points - points.mean(axis=0)
     _, _, vt = np.linalg.svd(centred, full_matrices=False)
     extents = np.ptp(centred @ vt.T, axis=0)
-    return float(max(fraction * extents.max(), NOISY_MERGE_FRACTION * extents.min()))
+    return float(max(fraction * extents.max(), noisy_fraction * extents.min()))
 
 
 def _bound(
@@ -373,3 +388,33 @@ def _surface_points(
     """Each contact's point on the object: its tip centre moved ρ along −(its face's normal)."""
     parts = [centres[list(f.contacts)] - rho * f.normal_array for f in faces if f.contacts]
     return np.vstack(parts) if parts else np.zeros((0, 3))
+
+
+_DERIVED: weakref.WeakKeyDictionary[ObjectModel, dict[Hashable, Any]] = weakref.WeakKeyDictionary()
+
+
+def derived(model: ObjectModel, key: Hashable, compute: Callable[[], T]) -> T:
+    """``compute()``, evaluated once per model and ``key``: a value derived from the model.
+
+    The model is immutable, so feature extractors share what they derive from it (face
+    angles, lateral edges, …) instead of computing it again for every proposition. The
+    values live in a weak cache beside the model (not in it), and go when the model goes.
+    The key must name everything the value depends on besides the model (e.g. a tolerance,
+    or the settings in force), and begin with the caller's module name, so that two modules
+    never share a key.
+
+    Examples
+    --------
+    >>> from tactile_kb.record import ExplorationRecord
+    >>> model = build_model(ExplorationRecord())
+    >>> derived(model, (__name__, "answer"), lambda: 42)
+    42
+    >>> derived(model, (__name__, "answer"), lambda: 0)  # computed once per model
+    42
+    """
+    values = _DERIVED.setdefault(model, {})
+    try:
+        return cast(T, values[key])
+    except KeyError:
+        value = values[key] = compute()
+        return value

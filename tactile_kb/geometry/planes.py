@@ -50,6 +50,7 @@ from scipy.cluster.hierarchy import fcluster, linkage
 from tactile_kb.errors import GeometryError, UsageError
 from tactile_kb.geometry.polyhedron import Polyhedron, polyhedron_from_planes
 from tactile_kb.record import Contact, ExplorationRecord
+from tactile_kb.settings import DEFAULTS, current
 from tactile_kb.types import FloatArray, Vec3
 
 __all__ = [
@@ -72,38 +73,38 @@ __all__ = [
 ]
 
 
-DEFAULT_CUT_DEG = 15.0
+DEFAULT_CUT_DEG = DEFAULTS.geometry.cut_deg
 """Cut of the normal clustering when the record names no sensor directions, degrees."""
 
-DEFAULT_SPLIT_TOL = 0.0025
+DEFAULT_SPLIT_TOL = DEFAULTS.geometry.split_tol
 """Largest distance (m) of a tip centre from its face's fitted plane before the face is split
 (and the largest for two faces to be merged as coplanar). 2.5 mm is five times the 0.5 mm
 position noise; records that declare a larger ``noise`` use six times that."""
 
-DEFAULT_SPAN = 0.002
+DEFAULT_SPAN = DEFAULTS.geometry.span
 """Centres span a face when their spread across the fitted line is at least this (m, RMS)."""
 
-DEFAULT_MERGE_DEG = 4.0
+DEFAULT_MERGE_DEG = DEFAULTS.geometry.merge_deg
 """Two faces whose normals differ by less than this (degrees) may merge if coplanar."""
 
-TABLE_TOL = 0.001
+TABLE_TOL = DEFAULTS.geometry.table_tol
 """Contacts whose plane is the table top (normal within 10° of +z, |offset| below this) are
 ignored."""
 
-EDGE_ROUNDING = 0.10
+EDGE_ROUNDING = DEFAULTS.geometry.edge_rounding
 """Real edges are rounded with a radius up to this fraction of the narrower of the two faces
 they join (:func:`edge_faces`): contacts there tilt the sensor direction and make a narrow
 "face" that is not one."""
 
-EDGE_MIN_WIDTH = 4.0
+EDGE_MIN_WIDTH = DEFAULTS.geometry.edge_min_width
 """Edge faces are looked for only against faces at least this many tip radii wide: next to
 narrower faces (a small pyramid's, a thin cylinder's facets) the tip's own size, not a
 rounding, decides where it touches, and such narrow faces are faces of the object."""
 
-EDGE_SIGMAS = 2.0
+EDGE_SIGMAS = DEFAULTS.geometry.edge_sigmas
 """An edge face's penetration is allowed ``EDGE_SIGMAS`` × σ/√m of noise on top."""
 
-MAX_REFINE_DEG = 35.0
+MAX_REFINE_DEG = DEFAULTS.geometry.max_refine_deg
 """A fitted normal further than this from the contacts' sensor normal is not trusted."""
 
 
@@ -156,7 +157,7 @@ def cut_angle(sensor_directions: Sequence[Sequence[float]] | FloatArray) -> floa
     """The clustering cut (degrees) for a finger: 0.6 × median neighbour spacing, in [5, 20]."""
     m = np.asarray(sensor_directions, dtype=float).reshape(-1, 3)
     if len(m) < 2:
-        return DEFAULT_CUT_DEG
+        return current().geometry.cut_deg
     m = m / np.linalg.norm(m, axis=1)[:, None]
     c = m @ m.T
     np.fill_diagonal(c, -1.0)
@@ -186,7 +187,9 @@ def _fit(centres: FloatArray, sensor_normals: FloatArray, span_min: float) -> _F
         _, s, vt = np.linalg.svd(centres - mean_c, full_matrices=False)
         span = float(s[1] / math.sqrt(m))
         normal = vt[2] if vt[2] @ mean_n >= 0 else -vt[2]
-        if span >= span_min and normal @ mean_n >= math.cos(math.radians(MAX_REFINE_DEG)):
+        if span >= span_min and normal @ mean_n >= math.cos(
+            math.radians(current().geometry.max_refine_deg)
+        ):
             res = (centres - mean_c) @ normal
             return _Fit(normal, float(normal @ mean_c), res, True, span)
         line = vt[0]
@@ -204,7 +207,7 @@ def _fit(centres: FloatArray, sensor_normals: FloatArray, span_min: float) -> _F
 
 
 def fit_face(
-    centres: FloatArray, sensor_normals: FloatArray, *, span_min: float = DEFAULT_SPAN
+    centres: FloatArray, sensor_normals: FloatArray, *, span_min: float | None = None
 ) -> tuple[FloatArray, float, FloatArray, bool]:
     """Fit the plane of the tip centres: ``(normal, normal·centre, residuals, refined)``.
 
@@ -213,6 +216,8 @@ def fit_face(
     otherwise the mean sensor normal, made perpendicular to the centres' line if they are
     collinear.
     """
+    if span_min is None:
+        span_min = current().geometry.span
     f = _fit(np.asarray(centres, float), np.asarray(sensor_normals, float), span_min)
     return f.normal, f.centre_offset, f.residuals, f.refined
 
@@ -352,8 +357,8 @@ def merge_planes(
     *,
     cut_deg: float | None = None,
     split_tol: float | None = None,
-    span_min: float = DEFAULT_SPAN,
-    merge_deg: float = DEFAULT_MERGE_DEG,
+    span_min: float | None = None,
+    merge_deg: float | None = None,
     include_table: bool = True,
     contacts: Sequence[int] | None = None,
 ) -> tuple[Face, ...]:
@@ -382,6 +387,10 @@ def merge_planes(
     tuple of Face
         Faces from contacts (ordered by their first contact), then the table.
     """
+    if span_min is None:
+        span_min = current().geometry.span
+    if merge_deg is None:
+        merge_deg = current().geometry.merge_deg
     chosen: Sequence[int]
     if contacts is None:
         chosen = range(len(record.contacts))
@@ -408,8 +417,8 @@ def merge_plane_arrays(
     *,
     cut_deg: float | None = None,
     split_tol: float | None = None,
-    span_min: float = DEFAULT_SPAN,
-    merge_deg: float = DEFAULT_MERGE_DEG,
+    span_min: float | None = None,
+    merge_deg: float | None = None,
     include_table: bool = True,
 ) -> tuple[Face, ...]:
     """:func:`merge_planes` of contacts already read into arrays by :func:`contact_arrays`.
@@ -430,6 +439,10 @@ def merge_plane_arrays(
     tuple of Face
         Faces from contacts (ordered by their first contact), then the table.
     """
+    if span_min is None:
+        span_min = current().geometry.span
+    if merge_deg is None:
+        merge_deg = current().geometry.merge_deg
     if any(np.shape(a) != (len(chosen), 3) for a in arrays):
         shapes = ", ".join(str(np.shape(a)) for a in arrays)
         raise UsageError(f"arrays must be three ({len(chosen)}, 3) arrays, got {shapes}")
@@ -441,7 +454,7 @@ def merge_plane_arrays(
     if not 0.0 < cut < 90.0:
         raise UsageError(f"cut_deg must lie in (0, 90), got {cut_deg}")
     noise = record.noise
-    tol = split_tol if split_tol is not None else max(DEFAULT_SPLIT_TOL, 6.0 * noise)
+    tol = split_tol if split_tol is not None else max(current().geometry.split_tol, 6.0 * noise)
     faces: list[Face] = []
     if len(chosen):
         quantised = _is_quantised(arrays[1], sensors)
@@ -482,7 +495,7 @@ def _faces_from_contacts(
         rho = float(np.median(np.linalg.norm(points - centres, axis=1)))
     # contacts on the table top are not the object
     table = (normals[:, 2] > math.cos(math.radians(10.0))) & (
-        np.abs(np.einsum("ij,ij->i", normals, points)) <= TABLE_TOL
+        np.abs(np.einsum("ij,ij->i", normals, points)) <= current().geometry.table_tol
     )
     keep = np.flatnonzero(~table)
     if len(keep) == 0:
@@ -536,7 +549,7 @@ def _finger(directions: tuple[Vec3, ...]) -> tuple[FloatArray, float, float]:
     sensors = np.asarray(directions, dtype=float).reshape(-1, 3)
     sensors.setflags(write=False)
     cut = cut_angle(sensors)
-    cone = cut / 0.6 / 2.0 if len(sensors) >= 2 else DEFAULT_CUT_DEG
+    cone = cut / 0.6 / 2.0 if len(sensors) >= 2 else current().geometry.cut_deg
     return sensors, cut, cone
 
 
@@ -599,7 +612,7 @@ def edge_faces(
     rho: float,
     *,
     noise: float = 0.0,
-    rounding: float = EDGE_ROUNDING,
+    rounding: float | None = None,
     max_faces: int = 40,
 ) -> list[int]:
     """Indices of the contact faces that are touches of the other faces' edges, not faces.
@@ -631,6 +644,8 @@ def edge_faces(
     rounding
         See :data:`EDGE_ROUNDING`.
     """
+    if rounding is None:
+        rounding = current().geometry.edge_rounding
     kept = list(range(len(faces)))
     removed: list[int] = []
     if len(faces) > max_faces:
@@ -669,7 +684,7 @@ def edge_faces(
             if f.source != "contacts" or not f.contacts or f.refined:
                 continue  # a face whose centres span a plane of its own is a face
             if max((widths.get(j, 0.0) for j in adjacent.get(k, ())), default=1.0) < (
-                EDGE_MIN_WIDTH * rho
+                current().geometry.edge_min_width * rho
             ):
                 continue  # only narrow faces around (a curved object): cheap early answer
             others = [j for j in kept if j != k]
@@ -692,11 +707,11 @@ def edge_faces(
             against = [others[int(poly.plane_index[fi])] for fi in np.flatnonzero(near.any(0))]
             # the widest of them: next to it may lie another edge face, not yet removed
             width = max((widths.get(j, 0.0) for j in against), default=0.0)
-            if width < EDGE_MIN_WIDTH * rho:
+            if width < current().geometry.edge_min_width * rho:
                 continue  # against narrow faces (a small or curved object) a face stays
             if any(faces[j].n_contacts < f.n_contacts for j in against if faces[j].contacts):
                 continue  # touched more than a face it lies against: explored as a face
-            allowed = rounding * width + EDGE_SIGMAS * noise / math.sqrt(len(c))
+            allowed = rounding * width + current().geometry.edge_sigmas * noise / math.sqrt(len(c))
             if float(penetration.max()) <= allowed:
                 best = k
                 break

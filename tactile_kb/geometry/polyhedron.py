@@ -40,6 +40,7 @@ from scipy.sparse.csgraph import connected_components
 from scipy.spatial import ConvexHull, HalfspaceIntersection, QhullError
 
 from tactile_kb.errors import GeometryError, OpenModelError, UsageError
+from tactile_kb.settings import DEFAULTS, current
 from tactile_kb.types import FloatArray
 
 __all__ = [
@@ -52,7 +53,7 @@ __all__ = [
 ]
 
 
-DEFAULT_MERGE_FRACTION = 0.03
+DEFAULT_MERGE_FRACTION = DEFAULTS.geometry.merge_fraction
 """Vertices closer than this fraction of the object's diameter are merged into one.
 
 Noisy planes that should meet in one vertex (a pyramid's apex, the four-face vertices of an
@@ -338,7 +339,7 @@ def polyhedron_from_planes(
     offsets: ArrayLike,
     *,
     tol: float | None = None,
-    merge_fraction: float = DEFAULT_MERGE_FRACTION,
+    merge_fraction: float | None = None,
     bound: tuple[ArrayLike, float] | None = None,
     interior: ArrayLike | None = None,
 ) -> Polyhedron:
@@ -373,6 +374,8 @@ def polyhedron_from_planes(
     GeometryError
         The half-spaces are empty or flat, or the topology fails Euler's formula.
     """
+    if merge_fraction is None:
+        merge_fraction = current().geometry.merge_fraction
     n, d = _as_planes(normals, offsets)
     opened = open_directions(n)
     if opened:

@@ -31,6 +31,7 @@ import shapely.geometry.polygon
 from tactile_kb.errors import UsageError
 from tactile_kb.geometry.polyhedron import Polyhedron
 from tactile_kb.record import Contact, ExplorationRecord
+from tactile_kb.settings import DEFAULTS, current
 from tactile_kb.types import FloatArray
 
 __all__ = [
@@ -44,13 +45,13 @@ __all__ = [
 ]
 
 
-LINE_TOL = 0.004
+LINE_TOL = DEFAULTS.geometry.line_tol
 """Two touched lines within this distance (m) and ``PLANE_DEG`` are the same plane."""
 
-PLANE_DEG = 8.0
+PLANE_DEG = DEFAULTS.geometry.plane_deg
 """Two touched lines within this angle (degrees) and ``LINE_TOL`` are the same plane."""
 
-SPAN_2D = 0.005
+SPAN_2D = DEFAULTS.geometry.span_2d
 """A side's line is refined from its tip centres when they spread this much (m, RMS)."""
 
 
@@ -150,7 +151,7 @@ def touched_lines(
         if len(ks) >= 2:
             mean = centres.mean(axis=0)
             _, s, vt = np.linalg.svd(centres - mean)
-            if s[0] / math.sqrt(len(ks)) >= SPAN_2D:
+            if s[0] / math.sqrt(len(ks)) >= current().geometry.span_2d:
                 m = np.array([-vt[0, 1], vt[0, 0]])
                 m = m if m @ n >= 0 else -m
                 if m @ n >= math.cos(math.radians(35.0)):
@@ -159,7 +160,10 @@ def touched_lines(
     # the contour closes on the side it started from
     if len(out) > 2:
         a, b = out[0], out[-1]
-        if np.dot(a.normal, b.normal) >= cos_tol and abs(a.offset - b.offset) <= LINE_TOL:
+        if (
+            np.dot(a.normal, b.normal) >= cos_tol
+            and abs(a.offset - b.offset) <= current().geometry.line_tol
+        ):
             out[0] = TouchedLine(
                 a.normal, a.offset, b.contacts + a.contacts, a.refined or b.refined
             )
@@ -225,9 +229,16 @@ def layer_sections(record: ExplorationRecord) -> tuple[LayerSection, ...]:
 
 
 def distinct_planes(
-    sections: Sequence[LayerSection], *, angle_deg: float = PLANE_DEG, offset_tol: float = LINE_TOL
+    sections: Sequence[LayerSection],
+    *,
+    angle_deg: float | None = None,
+    offset_tol: float | None = None,
 ) -> list[tuple[tuple[float, float], float]]:
     """The different vertical planes ``(normal_xy, offset)`` touched over all layers."""
+    if angle_deg is None:
+        angle_deg = current().geometry.plane_deg
+    if offset_tol is None:
+        offset_tol = current().geometry.line_tol
     out: list[tuple[tuple[float, float], float]] = []
     cos_tol = math.cos(math.radians(angle_deg))
     for s in sections:

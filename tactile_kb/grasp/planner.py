@@ -67,7 +67,7 @@ import shapely.ops
 import shapely.validation
 
 from tactile_kb.errors import UsageError
-from tactile_kb.geometry.blocks import SECTION_TOL, SectionSolid, section_solid
+from tactile_kb.geometry.blocks import SectionSolid, section_solid
 from tactile_kb.geometry.model import ObjectModel, build_model
 from tactile_kb.geometry.polyhedron import Polyhedron
 from tactile_kb.grasp.quality import (
@@ -80,6 +80,7 @@ from tactile_kb.grasp.quality import (
     torque_scale,
 )
 from tactile_kb.record import ExplorationRecord
+from tactile_kb.settings import DEFAULTS, current
 from tactile_kb.types import FloatArray, vec3
 
 __all__ = [
@@ -108,15 +109,15 @@ DEFAULT_MAX_COM_OFFSET = 0.02
 DEFAULT_DENSITY = 1000.0
 """kg/m³, for the object's mass when none is given (touch does not weigh)."""
 
-RANK_ANGLE_STEP_DEG = 2.0
+RANK_ANGLE_STEP_DEG = DEFAULTS.grasp.rank_angle_step_deg
 """Candidates whose planes' angles fall in the same step of this many degrees rank as equally
 parallel (0.4° and 0.6° apart are both "parallel" to a finger with 0.5 mm of noise)."""
 
 QUALITY_MEASURE = "ferrari_canny_soft"
 """The name of :attr:`GraspCandidate.quality` in JSON output."""
 
-TABLE_ANGLE_DEG = 5.0
-TABLE_HEIGHT_TOL = 0.002
+TABLE_ANGLE_DEG = DEFAULTS.grasp.table_angle_deg
+TABLE_HEIGHT_TOL = DEFAULTS.grasp.table_height_tol
 
 
 @dataclass(kw_only=True, frozen=True)
@@ -164,7 +165,7 @@ class GraspCandidate:
     def rank_key(self) -> tuple[int, int, float]:
         """Angle in steps of :data:`RANK_ANGLE_STEP_DEG`, then COM offset in whole millimetres,
         then the opening."""
-        step = math.floor(self.angle_deg / RANK_ANGLE_STEP_DEG + 1e-9)
+        step = math.floor(self.angle_deg / current().grasp.rank_angle_step_deg + 1e-9)
         return (step, round(self.com_offset * 1000.0), self.width)
 
     def to_dict(self) -> dict[str, Any]:
@@ -255,9 +256,13 @@ def _unit(v: FloatArray) -> FloatArray:
 def _table_faces(model: ObjectModel | None, poly: Polyhedron) -> set[int]:
     out = set()
     zmin = float(poly.vertices[:, 2].min())
-    cos_tol = math.cos(math.radians(TABLE_ANGLE_DEG))
+    cos_tol = math.cos(math.radians(current().grasp.table_angle_deg))
     for k, (n, d) in enumerate(zip(poly.normals, poly.offsets, strict=True)):
-        if n[2] <= -cos_tol and abs(d) <= TABLE_HEIGHT_TOL and zmin <= TABLE_HEIGHT_TOL:
+        if (
+            n[2] <= -cos_tol
+            and abs(d) <= current().grasp.table_height_tol
+            and zmin <= current().grasp.table_height_tol
+        ):
             out.add(k)
         known = model is not None and len(model.face_of) == len(poly.faces)
         if known and model is not None and model.faces[model.face_of[k]].source == "table":
@@ -617,7 +622,7 @@ def _spans(geom: shapely.Geometry, u: FloatArray, a: FloatArray, grow: float) ->
     for part in _parts(geom):
         xy = np.asarray(part.exterior.coords, dtype=float)
         along = xy @ a
-        if along.max() - along.min() < SECTION_TOL or part.area <= 0.0:
+        if along.max() - along.min() < current().geometry.section_tol or part.area <= 0.0:
             continue
         across = xy @ u
         out.append((float(across.min()) - grow, float(across.max()) + grow))
@@ -676,7 +681,9 @@ def _section_pairs(
             if angle > limit + 1e-9:
                 continue
             a = _unit(ni - nj)  # along the grasp line, towards side i
-            if ((starts[i] + ends[i]) / 2.0 - (starts[j] + ends[j]) / 2.0) @ a <= SECTION_TOL:
+            if (
+                (starts[i] + ends[i]) / 2.0 - (starts[j] + ends[j]) / 2.0
+            ) @ a <= current().geometry.section_tol:
                 continue  # the sides look at each other (the walls of a notch)
             pair = (i, j)
             out.append(
@@ -754,7 +761,7 @@ def _section_grasp(
         )
     for side, sign in ((i, 1.0), (j, -1.0)):
         near0, near1 = at(side, s0 - margin), at(side, s1 + margin)
-        push = sign * a * SECTION_TOL
+        push = sign * a * current().geometry.section_tol
         corridor = shapely.Polygon(
             [near0 + push, near1 + push, near1 + sign * far * a, near0 + sign * far * a]
         )
@@ -793,14 +800,17 @@ def _crosses_concave_face(model: ObjectModel, points: FloatArray) -> bool:
         n = face.normal_array
         s0, s1 = float(n @ p0) - face.offset, float(n @ p1) - face.offset
         if not (
-            (s0 < -SECTION_TOL and s1 > SECTION_TOL) or (s0 > SECTION_TOL and s1 < -SECTION_TOL)
+            (s0 < -current().geometry.section_tol and s1 > current().geometry.section_tol)
+            or (s0 > current().geometry.section_tol and s1 < -current().geometry.section_tol)
         ):
             continue
         q = p0 + s0 / (s0 - s1) * (p1 - p0)
         u, v = _basis(n)
         pts = centres[list(face.contacts)] - rho * n
         hull = shapely.MultiPoint(np.column_stack([pts @ u, pts @ v])).convex_hull
-        if hull.buffer(max(rho, SECTION_TOL)).covers(shapely.Point(float(q @ u), float(q @ v))):
+        if hull.buffer(max(rho, current().geometry.section_tol)).covers(
+            shapely.Point(float(q @ u), float(q @ v))
+        ):
             return True
     return False
 

@@ -44,6 +44,7 @@ from tactile_kb.errors import PluginError, UsageError
 from tactile_kb.objects import NOTES_KEY, ObjectLike, check_thickness, load_object, object_name
 from tactile_kb.plugins import Registry
 from tactile_kb.record import ExplorationRecord
+from tactile_kb.settings import DEFAULTS, current
 from tactile_kb.touch.finger import Finger, layout_warnings, load_finger
 from tactile_kb.touch.sensors import FaultySensors, check_fault_rates
 
@@ -94,11 +95,11 @@ class ExplorationSession(Protocol):
         ...
 
 
-NOISE_WARN_FRACTION = 0.2
+NOISE_WARN_FRACTION = DEFAULTS.explore.noise_warn_fraction
 """σ of the contact-position noise above this fraction of the tip radius is warned about: on
 the 5 mm tip, σ ≥ 1.5 mm makes flat faces read as curved."""
 
-NOISE_OBJECT_FRACTION = 0.03
+NOISE_OBJECT_FRACTION = DEFAULTS.explore.noise_object_fraction
 """σ above this fraction of the object's thinnest extent is noted in the record."""
 
 
@@ -125,7 +126,7 @@ def noise_problem(noise: float, tip_radius: float) -> tuple[str, str]:
             "e.g. 0.0005 for 0.5 mm",
             "",
         )
-    if noise > NOISE_WARN_FRACTION * tip_radius:
+    if noise > current().explore.noise_warn_fraction * tip_radius:
         return (
             "",
             f"large against the {r} tip: flat faces may read as curved and faces may be lost",
@@ -268,7 +269,7 @@ class WorldExplorer(abc.ABC):
         if warning:
             notes.append(f"noise σ = {noise * 1000:.3g} mm: {warning}")
         smallest = float(min(mesh.extents))
-        if noise > NOISE_OBJECT_FRACTION * smallest:
+        if noise > current().explore.noise_object_fraction * smallest:
             notes.append(
                 f"noise σ = {noise * 1000:.3g} mm is large against the object "
                 f"({smallest * 1000:.3g} mm at its thinnest): faces and edges may be misread"

@@ -45,6 +45,7 @@ from numpy.typing import NDArray
 from pydantic import BaseModel, ConfigDict, Field, field_validator
 
 from tactile_kb.errors import LayoutFileError, Problem, UsageError
+from tactile_kb.settings import DEFAULTS, current
 from tactile_kb.types import Vec3
 from tactile_kb.yaml_source import Source, format_path, load_yaml, validate
 
@@ -67,7 +68,7 @@ DEFAULT_TIP_RADIUS = 0.005
 """ρ for the built-in layouts: a 5 mm hemispherical tip (objects of 2–30 cm)."""
 
 
-ALIGN_4_DEG = 10.0
+ALIGN_4_DEG = DEFAULTS.finger.align_4_deg
 """Degrees: the 4-sensor finger is meant for surfaces facing its sensors (axis-aligned objects
 made of rectangular parallelepipeds); a surface turned further from its sensor is reported."""
 
@@ -142,7 +143,12 @@ def _ring(elevation_deg: float, count: int, phase_deg: float = 0.0) -> list[Vec3
 
 
 def _layout_4() -> Finger:
-    return Finger(name="4", directions=tuple(_ring(0.0, 4)), cone_deg=46.0, align_deg=ALIGN_4_DEG)
+    return Finger(
+        name="4",
+        directions=tuple(_ring(0.0, 4)),
+        cone_deg=46.0,
+        align_deg=current().finger.align_4_deg,
+    )
 
 
 def _layout_33() -> Finger:
@@ -400,7 +406,7 @@ class Coverage:
         """Complete, and no contact direction is more than :data:`MAX_USABLE_ERROR_DEG` from
         the sensor that reports it: the planes found are then close enough to the faces for the
         features (parallel faces, perpendicular faces, edges) to be decided."""
-        return self.complete and self.max_error_deg <= MAX_USABLE_ERROR_DEG
+        return self.complete and self.max_error_deg <= current().finger.max_usable_error_deg
 
     @property
     def problems(self) -> tuple[str, ...]:
@@ -413,16 +419,16 @@ class Coverage:
                 f"(the largest gap: {size:g}° around elevation {e:g}°, azimuth {a:g}°), so "
                 "faces there are never sensed"
             )
-        if self.max_error_deg > MAX_USABLE_ERROR_DEG:
+        if self.max_error_deg > current().finger.max_usable_error_deg:
             out.append(
                 f"a contact direction can be {self.max_error_deg:.0f}° from the sensor that "
-                f"reports it (at most {MAX_USABLE_ERROR_DEG:g}° keeps faces and edges right), "
+                f"reports it (at most {current().finger.max_usable_error_deg:g}° keeps faces and edges right), "
                 "so the planes found are that far off"
             )
         return tuple(out)
 
 
-MAX_USABLE_ERROR_DEG = 25.0
+MAX_USABLE_ERROR_DEG = DEFAULTS.finger.max_usable_error_deg
 """The largest quantisation of a contact direction a layout may have for the features to be
 decided reliably (the 33-sensor finger: 20.3°; the parallel and perpendicular tests allow 15–20°)."""
 

@@ -61,6 +61,7 @@ import numpy as np
 
 from tactile_kb.errors import ExplorationError, UsageError
 from tactile_kb.record import Contact, ExplorationRecord, Layer
+from tactile_kb.settings import DEFAULTS, current
 from tactile_kb.touch.world import Motion, Vec3, World
 from tactile_kb.types import FloatArray
 
@@ -72,15 +73,15 @@ Mark = Literal["contact", "layer", "complete"]
 
 _Z = np.array([0.0, 0.0, 1.0])
 
-CURVED_RUN = 3
+CURVED_RUN = DEFAULTS.servo.curved_run
 """Edge touches in a row (each rolling off within ``edge_slide``) that mean a curved surface."""
 
-RIDE_STEP = 0.8
+RIDE_STEP = DEFAULTS.servo.ride_step
 """How far (in tip radii) a ride over an irregularity steps on before pressing back: far enough
 that the press, ``bump`` deeper than the surface, misses a real convex edge (√(2ρb − b²) for a
 right angle and a bump b ≤ ρ / 4: 0.66 ρ)."""
 
-RIDE_DEG = 20.0
+RIDE_DEG = DEFAULTS.servo.ride_deg
 """Degrees: a touch while riding over an irregularity (:meth:`Controller._ride`) whose sensors
 point this close to the surface's normal is the surface followed (a real face turns further at
 an edge: 30° and more between the faces of a 12-sided prism)."""
@@ -714,7 +715,7 @@ class Controller:
             travelled += m.distance
             if (
                 self.params.comply
-                and travelled + RIDE_STEP * self.rho < length
+                and travelled + current().servo.ride_step * self.rho < length
                 and (m.event == "blocked" or (m.event == "release" and f.sensor not in m.fired))
             ):
                 ahead = _chord(start, np.asarray(m.end, dtype=float), self.rho, m.direction)
@@ -757,7 +758,7 @@ class Controller:
             legs.append((r0, back.distance))
             pos = np.asarray(back.end, dtype=float)
             if back.event in ("none", "release"):
-                step = self._move(pos, ahead, RIDE_STEP * self.rho)
+                step = self._move(pos, ahead, current().servo.ride_step * self.rho)
                 legs.append((-ahead, step.distance))
                 pos = np.asarray(step.end, dtype=float)
                 if step.event == "touch" and step.distance > 0.25 * self.rho:
@@ -795,7 +796,7 @@ class Controller:
         if not m.closed:
             return False
         mean = _unit(self._dirs[list(m.closed)].sum(axis=0))
-        return float(mean @ press) >= math.cos(math.radians(RIDE_DEG))
+        return float(mean @ press) >= math.cos(math.radians(current().servo.ride_deg))
 
     def _contour(
         self, pos: FloatArray, f: _Follow, *, last: bool = False
@@ -1268,13 +1269,13 @@ class _EdgeTouches:
 
     def edge(self, index: int, segment: _Segment | None) -> None:
         self.run.append((index, segment))
-        curved = len(self.run) >= CURVED_RUN
+        curved = len(self.run) >= current().servo.curved_run
         for _, seg in self.run:
             if seg is not None:
                 seg.edge = not curved
 
     def surface(self) -> None:
-        if len(self.run) < CURVED_RUN:
+        if len(self.run) < current().servo.curved_run:
             self.dropped += [index for index, _ in self.run]
         self.run = []
 

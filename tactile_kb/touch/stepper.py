@@ -47,11 +47,10 @@ from numpy.typing import NDArray
 from scipy.spatial import cKDTree
 
 from tactile_kb.errors import UsageError
+from tactile_kb.settings import DEFAULTS, current
 from tactile_kb.touch.explorers import WorldExplorer
 from tactile_kb.touch.finger import Finger
 from tactile_kb.touch.world import (
-    BLOCK_TOL,
-    CONTACT_TOL,
     Box,
     Event,
     Motion,
@@ -78,7 +77,7 @@ DENSE_FACES = 4000
 triangles, edges and vertices near its segment (a 200k-triangle scan costs about what a
 few-thousand-triangle one does, instead of 50 times more)."""
 
-SAME_CONTACT_DEG = 1.0
+SAME_CONTACT_DEG = DEFAULTS.world.same_contact_deg
 """Degrees: a contact on a triangle's side this close in direction to a contact inside a face
 is the same contact (see :meth:`StepperWorld._touching`)."""
 
@@ -206,7 +205,7 @@ class StepperWorld:
         tolerance would otherwise let the neighbouring triangle of the same plane turn the
         direction by up to 0.25° and make a sensor at the edge of its cone flicker.
         """
-        r = self._rho + CONTACT_TOL
+        r = self._rho + current().world.contact_tol
         found = self._tree.query_ball_point(pts, r + self._tr_max + 1e-9, return_sorted=False)
         pi = np.repeat(np.arange(len(pts)), [len(f) for f in found])
         ti = np.fromiter(itertools.chain.from_iterable(found), dtype=np.intp, count=len(pi))
@@ -225,7 +224,7 @@ class StepperWorld:
         face = np.flatnonzero(inside)
         if len(side) and len(face):
             same = pi[side][:, None] == pi[face][None, :]
-            close = u[side] @ u[face].T >= math.cos(math.radians(SAME_CONTACT_DEG))
+            close = u[side] @ u[face].T >= math.cos(math.radians(current().world.same_contact_deg))
             keep = np.ones(len(pi), dtype=bool)
             keep[side[(same & close).any(axis=1)]] = False
             pi, u = pi[keep], u[keep]
@@ -364,7 +363,7 @@ class StepperWorld:
 
     def _block_at(self, a: FloatArray, u: FloatArray, limit: float) -> float:
         """Where along the segment the tip would start to penetrate (``inf`` if nowhere)."""
-        lo, hi = self._intervals(a, u, self._rho - BLOCK_TOL)
+        lo, hi = self._intervals(a, u, self._rho - current().world.block_tol)
         real = (hi - lo > _EPS_T) & (hi > _EPS_T) & (lo > -1e-10) & (lo <= limit)
         if not real.any():
             return math.inf
@@ -463,7 +462,7 @@ class StepperWorld:
         room = self._workspace.room(_v3(a), _v3(u))
         reach = min(float(length), room)
         if self._dense:
-            self._near = self._near_segment(a, u, reach, self._rho + CONTACT_TOL)
+            self._near = self._near_segment(a, u, reach, self._rho + current().world.contact_tol)
         try:
             return self._run_near(kind, a, u, length, fired0, room, reach)
         finally:
@@ -483,7 +482,7 @@ class StepperWorld:
         end_t = min(reach, t_block)
         if t_block <= reach:
             end_t = max(0.0, t_block - 1e-10)
-        lo, hi = self._intervals(a, u, self._rho + CONTACT_TOL)
+        lo, hi = self._intervals(a, u, self._rho + current().world.contact_tol)
         ends = np.concatenate([lo, hi])
         cand = np.unique(ends[(ends > _EPS_T) & (ends < end_t)])
         marks = np.array([0.0, *cand.tolist(), end_t])
@@ -498,7 +497,7 @@ class StepperWorld:
                 if set(state) - set(fired0):
                     # a touch: stop half-way into the contact shell, so that the contact holds
                     # robustly for the next motion (a grazing approach enters it very slowly)
-                    mlo, mhi = self._intervals(a, u, self._rho + 0.5 * CONTACT_TOL)
+                    mlo, mhi = self._intervals(a, u, self._rho + 0.5 * current().world.contact_tol)
                     ok = (mhi - mlo > _EPS_T) & (mlo >= t0 - 1e-12) & (mlo <= end_t)
                     if ok.any():
                         deeper = max(stop, float(mlo[ok].min()))

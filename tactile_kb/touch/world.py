@@ -60,6 +60,7 @@ from typing import Literal, Protocol, runtime_checkable
 
 import numpy as np
 
+from tactile_kb.settings import DEFAULTS
 from tactile_kb.touch.finger import Finger
 from tactile_kb.types import FloatArray, Vec3
 
@@ -82,10 +83,10 @@ Event = Literal["touch", "release", "blocked", "limit", "none"]
 
 MotionKind = Literal["move", "slide"]
 
-CONTACT_TOL = 1e-7
+CONTACT_TOL = DEFAULTS.world.contact_tol
 """Metres: the tip touches the object when its centre is within ρ + CONTACT_TOL of it."""
 
-BLOCK_TOL = 1e-9
+BLOCK_TOL = DEFAULTS.world.block_tol
 """Metres: a world blocks the tip where its distance to the object would drop below
 ρ − BLOCK_TOL."""
 

@@ -36,12 +36,12 @@ from __future__ import annotations
 import math
 import xml.etree.ElementTree as ET
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
+from tactile_kb.settings import current
 from tactile_kb.touch.finger import Finger
-from tactile_kb.touch.world import CONTACT_TOL
 from tactile_kb_mujoco.parts import ConvexPart
 
 __all__ = ["SceneOptions", "scene_xml", "site_radius"]
@@ -62,13 +62,14 @@ class SceneOptions:
         ``kp = m·ω²`` and critical damping ``kv = 2·m·ω``.
     margin
         Contact margin of the tip, metres: the tip is in contact (and pressed) within
-        ρ + margin of the object.
+        ρ + margin of the object; by default the settings' ``world.contact_tol`` when the
+        options are made.
     """
 
     timestep: float = 0.001
     finger_mass: float = 0.05
     omega: float = 150.0
-    margin: float = CONTACT_TOL
+    margin: float = field(default_factory=lambda: current().world.contact_tol)
 
     @property
     def kp(self) -> float:

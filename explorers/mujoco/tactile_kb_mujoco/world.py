@@ -50,9 +50,9 @@ import trimesh
 from numpy.typing import NDArray
 
 from tactile_kb.errors import ObjectError, UsageError
+from tactile_kb.settings import current
 from tactile_kb.touch.finger import Finger
 from tactile_kb.touch.world import (
-    BLOCK_TOL,
     Box,
     Event,
     Motion,
@@ -343,7 +343,7 @@ class MujocoWorld:
             return True
         if physical:
             return False
-        return probe.penetration > BLOCK_TOL
+        return probe.penetration > current().world.block_tol
 
     def _place(self, p: FloatArray) -> None:
         d = self.data
