@@ -8,7 +8,7 @@ import sys
 from pathlib import Path
 from typing import Any
 
-from tactile_kb.cli.options import nonnegative, positive
+from tactile_kb.cli.options import add_exploration_options, positive
 from tactile_kb.errors import TactileKBError, UsageError
 
 # Only the standard library and tactile_kb.errors at import time: `tactile-kb --help` stays
@@ -64,17 +64,7 @@ def register(sub: argparse._SubParsersAction[Any]) -> None:
         default="parallelepipeds",
         help="rule set name or YAML file (default: parallelepipeds)",
     )
-    p.add_argument("--explorer", default="stepper", help="explorer plugin (default: stepper)")
-    p.add_argument(
-        "--finger", default="33", help="finger layout: 4, 33 or a YAML file (default: 33)"
-    )
-    p.add_argument(
-        "--noise",
-        type=nonnegative,
-        default=0.0,
-        metavar="SIGMA_METRES",
-        help="σ of the contact-position noise, metres (default: 0)",
-    )
+    add_exploration_options(p, with_seed=False)  # one seed per run: --seeds below
     p.add_argument(
         "--seeds",
         type=_seeds,

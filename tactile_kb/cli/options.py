@@ -137,8 +137,9 @@ def object_inputs(args: argparse.Namespace) -> list[tuple[str, bool]]:
     return items
 
 
-def add_exploration_options(p: argparse.ArgumentParser) -> None:
-    """``--explorer``, ``--finger``, ``--noise`` and ``--seed``, as every exploring command has them."""
+def add_exploration_options(p: argparse.ArgumentParser, *, with_seed: bool = True) -> None:
+    """``--explorer``, ``--finger``, ``--noise`` and (with ``with_seed``) ``--seed``, as every
+    exploring command has them."""
     p.add_argument("--explorer", default="stepper", help="explorer plugin (default: stepper)")
     p.add_argument(
         "--finger", default="33", help="finger layout: 4, 33 or a YAML file (default: 33)"
@@ -150,7 +151,10 @@ def add_exploration_options(p: argparse.ArgumentParser) -> None:
         metavar="SIGMA_METRES",
         help="σ of the contact-position noise, metres (default: 0)",
     )
-    p.add_argument("--seed", type=seed, default=0, help="seed for noise and drop-outs (default: 0)")
+    if with_seed:
+        p.add_argument(
+            "--seed", type=seed, default=0, help="seed for noise and drop-outs (default: 0)"
+        )
 
 
 def seed(text: str) -> int:
