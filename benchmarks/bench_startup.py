@@ -3,7 +3,8 @@
 Each command runs in a fresh interpreter (as the console script does), five times; the
 median wall time is printed with the heavy libraries the command imported. ``--help``,
 ``--version`` import none of trimesh, scipy, sympy, matplotlib or an explorer plugin;
-``validate`` and ``query`` none but sympy (its ``SOPform`` minimises small classes).
+``validate``, ``query`` and ``compile`` none but dd, networkx and pysat (the BDDs, the groups
+and the conflict analysis).
 Run: ``python benchmarks/bench_startup.py``.
 """
 

@@ -1,5 +1,5 @@
 """What the quick commands import: ``--help`` and ``--version`` none of the heavy libraries,
-``validate`` and ``query`` no geometry, plotting or explorer plugin.
+``validate``, ``query`` and ``compile`` neither sympy nor any geometry, plotting or explorer plugin.
 
 Each runs in a fresh interpreter: the rest of the suite imports everything into this one.
 (Times are printed by ``benchmarks/bench_startup.py``, never checked here.)
@@ -52,11 +52,11 @@ def test_help_and_version_import_nothing_heavy(argv: list[str]) -> None:
         ["compile", "parallelepipeds"],
     ],
 )
-def test_rule_file_commands_import_no_geometry_plots_or_plugins(argv: list[str]) -> None:
+def test_rule_file_commands_import_no_sympy_geometry_plots_or_plugins(argv: list[str]) -> None:
     code, modules = imported_by(*argv)
     assert code == 0
-    # sympy is still imported: its SOPform minimises the classes' sums of products.
-    assert modules & set(GEOMETRY_AND_PLOTS) == set()
+    # the classes' sums of products are minimised by kb.minimise, not by sympy's SOPform
+    assert modules & {"sympy", *GEOMETRY_AND_PLOTS} == set()
     assert "tactile_kb.touch.explorers" not in modules
     if argv[0] in ("validate", "compile"):  # the bindings are checked, without the geometry
         assert "tactile_kb.features.builtin" in modules
@@ -83,11 +83,18 @@ def test_slow_work_shows_progress_on_a_terminal_only(tty: bool) -> None:
     import time
 
     from tactile_kb.cli.options import progress
+    from tactile_kb.touch.watch import current_watcher
 
     stream = _Terminal(tty)
     with progress("sphere.stl", stream=stream):  # type: ignore[arg-type]
+        watcher = current_watcher()
+        assert (watcher is not None) is tty  # nobody watches when nothing is shown
+        if watcher is not None:
+            watcher("layers", 7, 20)
         time.sleep(1.0)
     assert ("working on sphere.stl" in stream.text) is tty
+    assert ("following the contour, 7 touches" in stream.text) is tty
+    assert current_watcher() is None  # the watcher ends with the block
     quick = _Terminal(True)
     with progress("cube.stl", stream=quick):  # type: ignore[arg-type]
         pass

@@ -229,9 +229,20 @@ def notices(record: Any) -> list[str]:
     return list(record.notes)
 
 
+PHASE_WORDS = {
+    "first-contact": "approaching",
+    "layers": "following the contour",
+    "probe": "probing the sides",
+    "top": "exploring the top",
+    "complete": "completing the model",
+}
+"""How the progress line names the servo cycle's phases."""
+
+
 @contextlib.contextmanager
 def progress(item: str, *, stream: TextIO | None = None) -> Iterator[None]:
-    """Show ``item`` and the time spent on it on a terminal while the block runs.
+    """Show ``item``, the exploration's phase and touches so far, and the time spent, on a
+    terminal while the block runs.
 
     Nothing is shown when ``stream`` (default stderr) is not a terminal, nor for work that
     ends within half a second; the line is erased when the work ends.
@@ -242,7 +253,13 @@ def progress(item: str, *, stream: TextIO | None = None) -> Iterator[None]:
         return
     from tqdm import tqdm
 
+    from tactile_kb.touch.watch import watching
+
     done = threading.Event()
+    state = {"phase": "", "touches": 0}
+
+    def watch(phase: str, touches: int, motions: int) -> None:
+        state["phase"], state["touches"] = phase, touches
 
     def show() -> None:
         if done.wait(0.5):
@@ -250,17 +267,21 @@ def progress(item: str, *, stream: TextIO | None = None) -> Iterator[None]:
         with tqdm(
             total=None,
             desc=f"working on {item}",
-            bar_format="{desc} … {elapsed}",
+            bar_format="{desc} … {elapsed}{postfix}",
             file=out,
             leave=False,
         ) as bar:
             while not done.wait(0.25):
+                if state["phase"]:
+                    phase = PHASE_WORDS.get(str(state["phase"]), str(state["phase"]))
+                    bar.set_postfix_str(f"{phase}, {state['touches']} touches", refresh=False)
                 bar.refresh()
 
     thread = threading.Thread(target=show, daemon=True)
     thread.start()
     try:
-        yield
+        with watching(watch):
+            yield
     finally:
         done.set()
         thread.join()

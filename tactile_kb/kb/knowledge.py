@@ -15,7 +15,8 @@ from typing import TYPE_CHECKING, Any
 
 from tactile_kb.errors import Problem, UsageError
 from tactile_kb.kb.bdd import Node, exact_count, isop, iter_minterms
-from tactile_kb.kb.notation import Factored, Sop, sop_from_sympy, to_sympy
+from tactile_kb.kb.minimise import minimal_sop
+from tactile_kb.kb.notation import Factored, Sop, sop_from_terms, to_sympy
 from tactile_kb.kb.rules import RuleSet
 
 if TYPE_CHECKING:
@@ -184,12 +185,8 @@ class Knowledge:
             support = sorted(bdd.support(f), key=self.index.__getitem__)
             small = len(support) <= exact_limit
             if small and exact_count(bdd, f, support) <= EXACT_MAX_MINTERMS:
-                syms = [self.symbols[self.index[v]] for v in support]
                 rows = [[int(m[v]) for v in support] for m in bdd.pick_iter(f, care_vars=support)]
-                from sympy.logic import SOPform  # exact minimisation of a small function
-
-                expr = SOPform(syms, rows)
-                sop = sop_from_sympy(expr, {s: self.index[s.name] for s in syms})
+                sop = sop_from_terms(minimal_sop(rows), [self.index[v] for v in support])
             else:
                 sop = isop(bdd, f, f, self.index)
         self._sop_cache[f] = sop

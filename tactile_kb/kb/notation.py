@@ -55,6 +55,7 @@ __all__ = [
     "normalize",
     "paper",
     "sop_from_sympy",
+    "sop_from_terms",
     "to_sympy",
 ]
 
@@ -200,6 +201,19 @@ def cube_ints(cube: Cube, n: int) -> tuple[int, ...]:
     for w in free:
         out += [x | w for x in out]
     return tuple(sorted(out))
+
+
+def sop_from_terms(terms: Iterable[Sequence[int]], positions: Sequence[int]) -> Sop:
+    """Terms of 0/1/``DASH`` over ``positions`` (proposition indices) as a :data:`Sop`.
+
+    >>> sop_from_terms([[1, 3], [0, 0]], [4, 2])
+    (((2, False), (4, False)), ((4, True),))
+    """
+    sop = [
+        tuple(sorted((p, bool(v)) for p, v in zip(positions, term, strict=True) if v in (0, 1)))
+        for term in terms
+    ]
+    return tuple(sorted(sop, key=_cube_order))
 
 
 def sop_from_sympy(expr: Any, index: Mapping[sympy.Symbol, int]) -> Sop:

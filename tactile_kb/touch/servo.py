@@ -62,6 +62,7 @@ import numpy as np
 from tactile_kb.errors import ExplorationError, UsageError
 from tactile_kb.record import Contact, ExplorationRecord, Layer
 from tactile_kb.settings import DEFAULTS, current
+from tactile_kb.touch.watch import current_watcher
 from tactile_kb.touch.world import Motion, Vec3, World
 from tactile_kb.types import FloatArray
 
@@ -334,6 +335,9 @@ class Controller:
         self.path.append(m.measured)
         self._last_pos = m.end
         self._last_move = m
+        watcher = current_watcher()
+        if watcher is not None:
+            watcher(self._phase, self.touches, self.motions)
         if self.motions >= self.params.max_motions:
             raise _Budget(f"motion budget of {self.params.max_motions} exhausted")
         return m
