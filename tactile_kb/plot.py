@@ -496,6 +496,19 @@ def _on_path(node: TreeNode, values: Mapping[str, bool | None]) -> bool:
     return all(values.get(n) is v for n, v in node.values)
 
 
+def _hot(node: TreeNode, values: Mapping[str, bool | None], decision: Decision) -> bool:
+    """Whether the decision's path takes this branch: its values are the decision's, or it is
+    a leaf of the decided class whose other values the decision left open (they did not
+    matter)."""
+    if _on_path(node, values):
+        return True
+    return (
+        not node.children
+        and node.label == decision.label
+        and all(values.get(n) in (v, None) for n, v in node.values)
+    )
+
+
 def plot_tree(
     rules: RuleSet | KnowledgeBase | str | Path,
     path: str | Path | None = None,
@@ -673,7 +686,7 @@ def _draw_tree(
     def draw(node: TreeNode, hot: bool) -> None:
         x = xs[node.phase + 1]
         for child in node.children:
-            child_hot = hot and decision is not None and _on_path(child, values)
+            child_hot = hot and decision is not None and _hot(child, values, decision)
             end_x = xs[child.phase + 1] if child.children else x_leaf
             colour = _HIGHLIGHT if child_hot else "0.55"
             width = 2.2 if child_hot else 0.7
@@ -694,10 +707,7 @@ def _draw_tree(
             ax.text(
                 x_leaf + 0.01,
                 node.y,
-                textwrap.fill(
-                    textwrap.shorten(node.answer, 2 * _LEAF_CHARS - 2, placeholder=" …"),
-                    _LEAF_CHARS,
-                ),
+                "\n".join(textwrap.wrap(node.answer, _LEAF_CHARS, max_lines=2, placeholder=" …")),
                 ha="left",
                 va="center",
                 fontsize=font,

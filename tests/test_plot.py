@@ -229,6 +229,20 @@ def test_a_large_tree_is_folded_off_the_path_and_the_answer_highlighted() -> Non
     assert "folded" in fig.texts[0].get_text()
 
 
+def test_an_answer_reached_with_values_left_open_is_highlighted() -> None:
+    """A cube's bits leave S open (it no longer matters): both R·S and R·S̄ cube leaves are
+    lit, and only they; a leaf of another class with compatible values stays grey."""
+    kb = compile_rules("polyhedra")
+    decision = kb.classify("10110111110011-")
+    assert decision.label == "cube" and decision.values["S"] is None
+    fig = plot_tree(kb, decision=decision)
+    (ax,) = fig.axes
+    boxes = [t for t in ax.texts if t.get_bbox_patch() is not None]
+    hot = [t for t in boxes if to_hex(t.get_bbox_patch().get_edgecolor()) == "#e66100"]
+    assert [t.get_text() for t in hot] == [decision.answer, decision.answer]
+    assert all(len(t.get_text().splitlines()) <= 2 for t in boxes)  # no box spills over
+
+
 def test_classify_plot_draws_the_true_mesh(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
     import tactile_kb.plot
     from tactile_kb.cli import main
