@@ -84,7 +84,7 @@ def make_dataset(folder: Path, count: int, seed: int = 7) -> list[BatchItem]:
 
 def stand_in(task: dict[str, Any]) -> dict[str, Any]:
     """STAND-IN for classification (see the module docstring): read, hash, return a row."""
-    from tactile_kb.batch import _finish_row
+    from tactile_kb.batch import finish_row
 
     started = time.perf_counter()
     data = Path(task["object"]).read_bytes()
@@ -105,7 +105,7 @@ def stand_in(task: dict[str, Any]) -> dict[str, Any]:
         "reported": {},
         "measures": {"edges": 12, "faces": 6, "height": 0.06, "sides": 4, "vertices": 8},
     }
-    return _finish_row(task, row, started)
+    return finish_row(task, row, started)
 
 
 def _rss_mib() -> float:
