@@ -185,11 +185,25 @@ def main(argv: list[str] | None = None) -> None:
     levels = [int(v) for v in args.levels.split(",") if v]
     todo = jobs(args.instances, args.seeds, levels, explorers)
     t0 = time.perf_counter()
+    results: list[Outcome] = []
+
+    def progress(o: Outcome) -> None:
+        results.append(o)
+        j = o.job
+        print(
+            f"[{len(results)}/{len(todo)}] {o.seconds:6.2f} s  {j.explorer} {j.group} {j.rules} "
+            f"noise {j.noise:g} {j.name}: {o.got[:60]}",
+            file=sys.stderr,
+            flush=True,
+        )
+
     if args.workers > 1:
         with multiprocessing.get_context("fork").Pool(args.workers) as pool:
-            results = pool.map(run_job, todo, chunksize=1)
+            for o in pool.imap_unordered(run_job, todo, chunksize=1):
+                progress(o)
     else:
-        results = [run_job(j) for j in todo]
+        for j in todo:
+            progress(run_job(j))
     ideal = {_key(o.job): o.seconds for o in results if o.job.group == "ideal"}
     head = (
         f"{'explorer':9s} {'group':8s} {'right':>9s} {'acc %':>6s} {'open':>5s} "

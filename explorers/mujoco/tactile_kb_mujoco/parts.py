@@ -50,8 +50,8 @@ from scipy.spatial import ConvexHull, cKDTree
 from tactile_kb.errors import ObjectError
 
 __all__ = [
-    "MAX_HULL_VERTICES",
     "CONCAVITY_RHO",
+    "MAX_HULL_VERTICES",
     "ROUGHNESS_SIGMAS",
     "Concavity",
     "ConvexPart",
@@ -272,8 +272,9 @@ def felt_concavity(
 
     Each surface point p lies at depth δ(p) under the hull (its distance to the hull's
     boundary). A sphere of radius ρ lowered onto p rests on the surface points q around it:
-    standing on q, at distance r = |p − q| ≤ ρ, it stays ρ − √(ρ² − r²) above p's level, so it
-    reaches p's hollow to depth min_q (δ(q) + ρ − √(ρ² − r²)) at most (q = p included). The
+    standing on q, at distance r ≤ ρ from p across the surface (|p − q|² = r² + (δ(p) −
+    δ(q))²), its lowest point stays ρ − √(ρ² − r²) below q, so it reaches p's hollow to depth
+    min_q (δ(q) + ρ − √(ρ² − r²)) at most (q = p included). The
     largest such depth over the surface is returned with the surface's roughness
     (:class:`Concavity`): vertex noise, embossed letters and narrow grooves give little, a wide
     dent its depth, a real notch (an L-shape's) its full depth.
@@ -313,8 +314,9 @@ def felt_concavity(
             break  # every remaining point is shallower than the answer already found
         for p, near in zip(idx, tree.query_ball_point(pts[idx], rho), strict=True):
             q = np.asarray(near, dtype=int)
-            r2 = np.sum((pts[q] - pts[p]) ** 2, axis=1)
-            felt = float(np.min(depth[q] + rho - np.sqrt(np.maximum(0.0, rho * rho - r2))))
+            # Distance across the surface: the depth difference is the normal component.
+            r2 = np.sum((pts[q] - pts[p]) ** 2, axis=1) - (depth[q] - depth[p]) ** 2
+            felt = float(np.min(depth[q] + rho - np.sqrt(np.clip(rho * rho - r2, 0.0, None))))
             worst = max(worst, felt)
             if worst > limit:
                 return Concavity(worst, roughness)
@@ -341,9 +343,7 @@ def _coacd_parts(
     return parts
 
 
-def _nearly_convex(
-    mesh: trimesh.Trimesh, name: str, tip_radius: float | None, tol: float
-) -> bool:
+def _nearly_convex(mesh: trimesh.Trimesh, name: str, tip_radius: float | None, tol: float) -> bool:
     if tip_radius is None or tol <= 0:
         return False
     try:
