@@ -2,19 +2,27 @@
 classified.
 
 Run: ``.venv/bin/python benchmarks/bench_real.py [--instances N] [--seeds N] [--levels 1,2,3]
-[--workers N] [--explorer NAME ...]`` (or ``python benchmarks/run.py real``). It never fails;
-it prints, per group (real objects; perturbed solids per level) and explorer:
+[--workers N] [--explorer NAME ...] [--family NAME ...] [--no-real] [--log FILE]`` (or
+``python benchmarks/run.py real``). It never fails; it prints, per group (real objects; ideal
+solids; perturbed solids per level) and explorer:
 
 * right answers (%) over both rule files, with and without 0.5 mm contact-position noise;
 * "needs a closed model" endings (the exploration did not close the envelope);
 * the median touches per face on boxes (cubes and rectangular parallelepipeds);
-* the median seconds per object, and its ratio to the same ideal solid's seconds.
+* the median seconds per object, and the median ratio of an object's seconds to those of the
+  same ideal solid (same rules, noise and explorer).
 
 The real objects are ``tests/data/real`` (labels from its ``manifest.csv``); the perturbed
 solids are every family of ``bench_accuracy`` (one random instance each by default) made
-scan-like by :func:`tactile_kb.perturb.perturb` at levels 1–3 with 2 seeds. Level 3 cuts holes
-and adds floating specks; an explorer that refuses such a mesh shows as an error. The
-``mujoco`` explorer is measured when its plugin is installed.
+scan-like by :func:`tactile_kb.perturb.perturb` at levels 1–3. Level 3 cuts holes and adds
+floating specks; an explorer that refuses such a mesh shows as an error. The ``mujoco``
+explorer is measured when its plugin is installed.
+
+The default run takes one perturbation seed (764 classifications with both explorers, about
+20 minutes at 2 workers on a quiet 2-core machine). The issue's full figures take two:
+``--seeds 2`` (1,292 classifications, about twice as long). ``--log FILE`` writes every outcome
+to a CSV file as it comes (the jobs run in a shuffled order, so an interrupted run's log is a
+fair sample), and ``--summarize FILE`` prints the figures of such a file.
 """
 
 from __future__ import annotations
@@ -64,18 +72,29 @@ class Job:
 
 @dataclass(frozen=True)
 class Outcome:
-    job: Job
+    """One classification, as the summary and the ``--log`` file hold it."""
+
+    explorer: str
+    group: str
+    name: str
+    rules: str
+    noise: float
+    label: str
+    faces: int
     got: str
     touches: int
     seconds: float
 
     @property
     def right(self) -> bool:
-        return self.got == self.job.label
+        return self.got == self.label
 
     @property
     def open_model(self) -> bool:
         return "needs a closed model" in self.got
+
+
+FIELDS = list(Outcome.__dataclass_fields__)
 
 
 def _label_for(rules: str, poly_label: str, mesh: trimesh.Trimesh) -> str | None:
@@ -101,20 +120,38 @@ def _classify(mesh: trimesh.Trimesh, job: Job) -> tuple[str, int, float]:
 
 def run_job(job: Job) -> Outcome:
     got, touches, seconds = _classify(job.mesh, job)
-    return Outcome(job, got, touches, seconds)
+    return Outcome(
+        job.explorer,
+        job.group,
+        job.name,
+        job.rules,
+        job.noise,
+        job.label,
+        job.faces,
+        got,
+        touches,
+        seconds,
+    )
 
 
-def _key(job: Job) -> tuple[str, str, str, float]:
+def _key(o: Outcome) -> tuple[str, str, str, float]:
     """The same ideal solid, rules, explorer and noise (perturbation seeds aside)."""
-    return (job.name.rsplit(" seed ", 1)[0], job.rules, job.explorer, job.noise)
+    return (o.name.rsplit(" seed ", 1)[0], o.rules, o.explorer, o.noise)
 
 
-def jobs(instances: int, seeds: int, levels: list[int], explorers: list[str]) -> list[Job]:
+def jobs(
+    instances: int,
+    seeds: int,
+    levels: list[int],
+    explorers: list[str],
+    families: set[str] | None = None,
+    real: bool = True,
+) -> list[Job]:
     out: list[Job] = []
     with (REAL / "manifest.csv").open(newline="") as f:
         rows = list(csv.DictReader(f))
     for explorer in explorers:
-        for noise in (0.0, NOISE):
+        for noise in (0.0, NOISE) if real else ():
             for row in rows:
                 mesh = load_object(REAL / row["path"])
                 out.append(
@@ -131,6 +168,8 @@ def jobs(instances: int, seeds: int, levels: list[int], explorers: list[str]) ->
                     )
                 )
         for k, fam in enumerate(FAMILIES):
+            if families is not None and fam.name not in families:
+                continue
             rng = np.random.default_rng(2000 + k)
             for _ in range(instances):
                 ideal, poly_label, desc = fam.build(rng)
@@ -172,57 +211,117 @@ def jobs(instances: int, seeds: int, levels: list[int], explorers: list[str]) ->
     return out
 
 
-def main(argv: list[str] | None = None) -> None:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--instances", type=int, default=1, help="random objects per family")
-    ap.add_argument("--seeds", type=int, default=2, help="perturbation seeds per object")
-    ap.add_argument("--levels", default="1,2,3", help="perturbation levels")
-    ap.add_argument("--workers", type=int, default=2, help="processes")
-    ap.add_argument("--explorer", action="append", default=[], help="explorers (default: all)")
-    args = ap.parse_args(argv if argv is not None else [])
-    known = available_explorers()
-    explorers = args.explorer or [e for e in ("stepper", "mujoco") if e in known]
-    levels = [int(v) for v in args.levels.split(",") if v]
-    todo = jobs(args.instances, args.seeds, levels, explorers)
-    t0 = time.perf_counter()
-    if args.workers > 1:
-        with multiprocessing.get_context("fork").Pool(args.workers) as pool:
-            results = pool.map(run_job, todo, chunksize=1)
-    else:
-        results = [run_job(j) for j in todo]
-    ideal = {_key(o.job): o.seconds for o in results if o.job.group == "ideal"}
+def summary(results: list[Outcome]) -> None:
+    """Print the figures per explorer and group, then the wrong answers."""
+    ideal = {_key(o): o.seconds for o in results if o.group == "ideal"}
     head = (
         f"{'explorer':9s} {'group':8s} {'right':>9s} {'acc %':>6s} {'open':>5s} "
         f"{'t/face box':>10s} {'s/obj':>6s} {'× ideal':>7s}"
     )
     print(head)
     print("-" * len(head))
-    for explorer in explorers:
-        for group in dict.fromkeys(o.job.group for o in results):
-            rs = [o for o in results if o.job.group == group and o.job.explorer == explorer]
+    for explorer in dict.fromkeys(o.explorer for o in results):
+        for group in dict.fromkeys(o.group for o in results):
+            rs = [o for o in results if o.group == group and o.explorer == explorer]
             if not rs:
                 continue
             right = sum(o.right for o in rs)
             opened = sum(o.open_model for o in rs)
-            boxes = [o.touches / o.job.faces for o in rs if o.job.label in BOXES and o.job.faces]
+            boxes = [o.touches / o.faces for o in rs if o.label in BOXES and o.faces]
             tpf = f"{statistics.median(boxes):10.2f}" if boxes else f"{'-':>10s}"
             secs = statistics.median(o.seconds for o in rs)
-            ratios = [o.seconds / ideal[_key(o.job)] for o in rs if _key(o.job) in ideal]
+            ratios = [o.seconds / ideal[_key(o)] for o in rs if _key(o) in ideal]
             ratio = f"{statistics.median(ratios):7.2f}" if ratios else f"{'-':>7s}"
             print(
                 f"{explorer:9s} {group:8s} {right:4d}/{len(rs):<4d} {100 * right / len(rs):6.1f} "
                 f"{opened:5d} {tpf} {secs:6.2f} {ratio}"
             )
-    print(f"{len(results)} classifications in {time.perf_counter() - t0:.1f} s")
     wrong = [o for o in results if not o.right]
     if wrong:
         print(f"\nwrong ({len(wrong)}):")
         for o in wrong:
-            j = o.job
-            noise = "noisy" if j.noise else "exact"
+            noise = "noisy" if o.noise else "exact"
             print(
-                f"  [{j.explorer} {j.group} {j.rules} {noise}] {j.name}: want {j.label}, got {o.got}"
+                f"  [{o.explorer} {o.group} {o.rules} {noise}] {o.name}: want {o.label}, got {o.got}"
             )
+
+
+def read_log(path: Path) -> list[Outcome]:
+    """The outcomes a ``--log`` file holds (a complete or an interrupted run)."""
+    with path.open(newline="") as f:
+        return [
+            Outcome(
+                r["explorer"],
+                r["group"],
+                r["name"],
+                r["rules"],
+                float(r["noise"]),
+                r["label"],
+                int(r["faces"]),
+                r["got"],
+                int(r["touches"]),
+                float(r["seconds"]),
+            )
+            for r in csv.DictReader(f)
+        ]
+
+
+def main(argv: list[str] | None = None) -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--instances", type=int, default=1, help="random objects per family")
+    ap.add_argument("--seeds", type=int, default=1, help="perturbation seeds per object (full: 2)")
+    ap.add_argument("--levels", default="1,2,3", help="perturbation levels")
+    ap.add_argument("--workers", type=int, default=2, help="processes")
+    ap.add_argument("--explorer", action="append", default=[], help="explorers (default: all)")
+    ap.add_argument("--family", action="append", default=[], help="families (default: all)")
+    ap.add_argument("--no-real", action="store_true", help="leave out the vendored real objects")
+    ap.add_argument("--log", type=Path, help="write each outcome to this CSV file as it comes")
+    ap.add_argument("--summarize", type=Path, help="print the figures of a --log file and stop")
+    args = ap.parse_args(argv if argv is not None else [])
+    if args.summarize:
+        summary(read_log(args.summarize))
+        return
+    known = available_explorers()
+    explorers = args.explorer or [e for e in ("stepper", "mujoco") if e in known]
+    levels = [int(v) for v in args.levels.split(",") if v]
+    todo = jobs(
+        args.instances, args.seeds, levels, explorers, set(args.family) or None, not args.no_real
+    )
+    # In a shuffled order, an interrupted run's log is a fair sample of the whole.
+    order = np.random.default_rng(0).permutation(len(todo))
+    todo = [todo[int(k)] for k in order]
+    t0 = time.perf_counter()
+    results: list[Outcome] = []
+    log = args.log.open("w", newline="") if args.log else None
+    writer = csv.DictWriter(log, FIELDS) if log else None
+    if writer:
+        writer.writeheader()
+
+    def progress(o: Outcome) -> None:
+        results.append(o)
+        if log and writer:
+            writer.writerow({f: getattr(o, f) for f in FIELDS})
+            log.flush()
+        print(
+            f"[{len(results)}/{len(todo)}] {o.seconds:6.2f} s  {o.explorer} {o.group} {o.rules} "
+            f"noise {o.noise:g} {o.name}: {o.got[:60]}",
+            file=sys.stderr,
+            flush=True,
+        )
+
+    try:
+        if args.workers > 1:
+            with multiprocessing.get_context("fork").Pool(args.workers) as pool:
+                for o in pool.imap_unordered(run_job, todo, chunksize=1):
+                    progress(o)
+        else:
+            for j in todo:
+                progress(run_job(j))
+    finally:
+        if log:
+            log.close()
+    summary(results)
+    print(f"{len(results)} classifications in {time.perf_counter() - t0:.1f} s")
 
 
 if __name__ == "__main__":

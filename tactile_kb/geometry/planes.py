@@ -654,12 +654,16 @@ def edge_faces(
     offsets = np.asarray([f.offset for f in faces], dtype=float)
     pts = centres[[i for f in faces for i in f.contacts]] if len(centres) else centres
     bound = (pts.mean(axis=0), 3.0 * float(np.ptp(pts, axis=0).max()) + rho)
+    # A point inside the polyhedron of all kept faces lies inside that of any of them: the
+    # polyhedra below start from it instead of solving a linear programme each.
+    inner: FloatArray | None = None
     while True:
         best: int | None = None
         try:
-            full = polyhedron_from_planes(normals[kept], offsets[kept], bound=bound)
+            full = polyhedron_from_planes(normals[kept], offsets[kept], bound=bound, interior=inner)
         except GeometryError:
             return sorted(removed)
+        inner = full.vertices.mean(axis=0)
         # each face's width: in the polyhedron of the faces that span planes of their own
         # (and the table) when they close, where narrow edge faces do not cut them short;
         # else in the model as it stands
@@ -672,7 +676,9 @@ def edge_faces(
         core = [k for k in kept if faces[k].refined or faces[k].source != "contacts"]
         if len(core) < len(kept):
             try:
-                solid = polyhedron_from_planes(normals[core], offsets[core], bound=bound)
+                solid = polyhedron_from_planes(
+                    normals[core], offsets[core], bound=bound, interior=inner
+                )
                 widths.update(
                     {core[int(j)]: _width(solid, fi) for fi, j in enumerate(solid.plane_index)}
                 )
@@ -689,7 +695,9 @@ def edge_faces(
                 continue  # only narrow faces around (a curved object): cheap early answer
             others = [j for j in kept if j != k]
             try:
-                poly = polyhedron_from_planes(normals[others], offsets[others], bound=bound)
+                poly = polyhedron_from_planes(
+                    normals[others], offsets[others], bound=bound, interior=inner
+                )
             except GeometryError:
                 continue  # without it the others do not close: a face
             c = centres[list(f.contacts)]

@@ -53,6 +53,11 @@ class MujocoExplorer(WorldExplorer):
     completer
         Makes the completer of one exploration (see
         :class:`~tactile_kb.touch.explorers.WorldExplorer`).
+    concavity_tol
+        How deep (metres, beyond the surface's roughness) the tip may reach under a mesh's
+        convex hull for the mesh to be collided as that hull rather than decomposed by CoACD
+        (:class:`~tactile_kb_mujoco.world.MujocoWorld`); default one tip radius, 0 always
+        decomposes.
     """
 
     name = "mujoco"
@@ -68,12 +73,14 @@ class MujocoExplorer(WorldExplorer):
         dropout: float = 0.0,
         false_fire: float = 0.0,
         completer: Callable[[], Completer] | None = None,
+        concavity_tol: float | None = None,
     ) -> None:
         super().__init__(params, completer=completer, dropout=dropout, false_fire=false_fire)
         self.speed = speed
         self.press = press
         self.threshold = threshold
         self.options = options
+        self.concavity_tol = concavity_tol
 
     def make_world(self, mesh: trimesh.Trimesh, finger: Finger, *, seed: int | None) -> MujocoWorld:
         """The MuJoCo world of ``mesh`` sensed with ``finger`` (ideal; the session adds the
@@ -86,4 +93,5 @@ class MujocoExplorer(WorldExplorer):
             press=self.press,
             threshold=self.threshold,
             options=self.options,
+            concavity_tol=self.concavity_tol,
         )

@@ -1,7 +1,7 @@
 """Split an object mesh into the convex parts MuJoCo collides with.
 
 MuJoCo collides a mesh geom through its convex hull, so a non-convex object must be given as
-several convex geoms. Three cases, tried in order:
+several convex geoms. Four cases, tried in order:
 
 * a convex mesh is one part, its own hull (``kind="mesh"``);
 * an *orthogonal* mesh, whose face normals all lie along three mutually perpendicular axes (the
@@ -9,6 +9,12 @@ several convex geoms. Three cases, tried in order:
   boxes: the distinct vertex coordinates along each axis cut space into a grid, the cells whose
   centre lies inside the mesh (generalised winding number) are kept, and runs of cells are
   merged greedily into as few boxes as the greedy sweep finds (``kind="box"``);
+* a *nearly convex* mesh, a convex solid with the imperfections of a scan (vertex noise,
+  dents, relief, ripples), is one part, its convex hull, when no concavity under the hull is
+  deeper than ``concavity_tol`` *as the tip feels it* (:func:`felt_concavity`): the tip of
+  radius ρ rests on the surface around a hollow and reaches into it only as far as the
+  hollow's width lets it. Decomposing such a mesh would take CoACD tens of seconds and cut
+  its faces into dozens of pieces whose seams the finger then meets;
 * any other mesh goes through CoACD (approximate convex decomposition, ``kind="mesh"``).
 
 Meshes MuJoCo cannot take raise :class:`~tactile_kb.errors.ObjectError` with one line: empty,
@@ -25,10 +31,14 @@ Examples
 >>> parts = convex_parts(ell)  # 6 × 2 cm and 2 × 3 cm arms, 3 cm high: 54 cm³
 >>> [p.kind for p in parts], round(sum(p.volume for p in parts) * 1e6, 3)
 (['box', 'box'], 54.0)
+>>> c = felt_concavity(ell, 0.005)  # the L's notch: 1 cm deep under the hull, a smooth surface
+>>> round(c.depth * 1000, 1), c.roughness
+(10.0, 0.0)
 """
 
 from __future__ import annotations
 
+import itertools
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from typing import Any, Literal
@@ -36,19 +46,34 @@ from typing import Any, Literal
 import numpy as np
 import trimesh
 from numpy.typing import NDArray
+from scipy.spatial import ConvexHull, cKDTree
 
 from tactile_kb.errors import ObjectError
 
 __all__ = [
+    "CONCAVITY_RHO",
     "MAX_HULL_VERTICES",
+    "ROUGHNESS_SIGMAS",
+    "Concavity",
     "ConvexPart",
     "convex_parts",
+    "felt_concavity",
     "orthogonal_frame",
     "winding_number",
 ]
 
 MAX_HULL_VERTICES = 10_000
 """Hull vertices above which a part is refused: MuJoCo's collision cost grows with them."""
+
+CONCAVITY_RHO = 1.0
+"""Tip radii: a mesh whose concavities a tip reaches no deeper than this (beyond its
+roughness, :data:`ROUGHNESS_SIGMAS`) is collided as its convex hull (:func:`convex_parts`)."""
+
+ROUGHNESS_SIGMAS = 6.0
+"""The convex hull of a rough surface rests on its highest points: a surface with vertex noise
+σ lies about 4σ under the hull of a few thousand vertices, and a tip resting on its
+neighbours about 2σ less. Concavities up to this many roughness σ deeper are the surface's
+roughness, not its shape."""
 
 FloatArray = NDArray[np.float64]
 
@@ -194,6 +219,132 @@ def _box_parts(mesh: trimesh.Trimesh, frame: FloatArray, max_cells: int) -> list
     return parts
 
 
+def _surface_points(mesh: trimesh.Trimesh, spacing: float) -> FloatArray:
+    """The mesh's vertices, plus the centres of triangles with an edge longer than ``spacing``
+    (a coarse mesh's large faces may sink under the hull away from their corners)."""
+    v = np.asarray(mesh.vertices, dtype=float)
+    tri = np.asarray(mesh.triangles, dtype=float)
+    if len(tri) == 0:
+        return v
+    edges = np.linalg.norm(tri - np.roll(tri, 1, axis=1), axis=2).max(axis=1)
+    return np.vstack([v, tri[edges > spacing].mean(axis=1)])
+
+
+def _hull_depths(points: FloatArray, equations: FloatArray, chunk_cells: int) -> FloatArray:
+    """Distance of each point inside a convex hull to its boundary (0 on or outside it).
+
+    For a point inside a convex polytope, the distance to the boundary is the least distance
+    to a facet's plane; computed in chunks of points so that no (points × facets) matrix
+    larger than ``chunk_cells`` is built.
+    """
+    normals, offsets = equations[:, :3], equations[:, 3]
+    out = np.empty(len(points))
+    step = max(1, chunk_cells // max(1, len(equations)))
+    for i in range(0, len(points), step):
+        signed = points[i : i + step] @ normals.T + offsets  # ≤ 0 inside each facet's plane
+        out[i : i + step] = np.maximum(0.0, -signed.max(axis=1))
+    return out
+
+
+@dataclass(frozen=True)
+class Concavity:
+    """How far a tip reaches under a mesh's convex hull (:func:`felt_concavity`), metres.
+
+    ``depth`` is the deepest reach found (when the search stopped early, only a lower bound
+    above its ``stop_above``); ``roughness`` is the surface's own small-scale roughness, the
+    median spread (standard deviation) of the depths under the hull among the points within a
+    tip radius of each other: vertex noise of σ gives about σ, a smooth surface 0.
+    """
+
+    depth: float
+    roughness: float
+
+
+def _thinned(points: FloatArray, depth: FloatArray, cell: float) -> tuple[FloatArray, FloatArray]:
+    """The deepest and the shallowest point of each cube of side ``cell``."""
+    keys = np.floor(points / cell).astype(np.int64)
+    _, group = np.unique(keys, axis=0, return_inverse=True)
+    group = group.ravel()
+    order = np.lexsort((depth, group))  # by cube, shallowest first
+    g = group[order]
+    first = np.flatnonzero(np.r_[True, g[1:] != g[:-1]])
+    last = np.r_[first[1:] - 1, len(order) - 1]
+    keep = np.unique(np.concatenate([order[first], order[last]]))
+    return points[keep], depth[keep]
+
+
+def felt_concavity(
+    mesh: trimesh.Trimesh,
+    tip_radius: float,
+    *,
+    roughness_sigmas: float | None = None,
+    stop_above: float = np.inf,
+    chunk_cells: int = 4_000_000,
+    samples: int = 400,
+    max_points: int = 20_000,
+) -> Concavity:
+    """How deep under its convex hull a tip of radius ``tip_radius`` reaches into ``mesh``.
+
+    Each surface point p lies at depth δ(p) under the hull (its distance to the hull's
+    boundary). A sphere of radius ρ lowered onto p rests on the surface points q around it:
+    standing on q, at distance r ≤ ρ from p across the surface (|p − q|² = r² + (δ(p) −
+    δ(q))²), its lowest point stays ρ − √(ρ² − r²) below q, so it reaches p's hollow to depth
+    min_q (δ(q) + ρ − √(ρ² − r²)) at most (q = p included). The
+    largest such depth over the surface is returned with the surface's roughness
+    (:class:`Concavity`): vertex noise, embossed letters and narrow grooves give little, a wide
+    dent its depth, a real notch (an L-shape's) its full depth.
+
+    Only points deeper than every answer so far are examined; the search stops as soon as a
+    depth above ``stop_above`` (plus ``roughness_sigmas`` times the roughness, when given) is
+    found, the answer then being only a lower bound. The roughness is measured on ``samples``
+    points chosen with a fixed seed. Memory stays within ``chunk_cells`` numbers per step,
+    whatever the mesh's size; a surface of more than ``max_points`` points is thinned to the
+    deepest and the shallowest point of each cube of ρ/4 (the hollows and the points a tip
+    rests on), which can only overstate the depth, by about a tenth of ρ at most.
+    """
+    rho = float(tip_radius)
+    if rho <= 0:
+        raise ValueError(f"tip_radius must be > 0, got {tip_radius}")
+    pts = _surface_points(mesh, rho)
+    try:
+        hull = ConvexHull(np.asarray(mesh.vertices, dtype=float))
+    except Exception as exc:  # qhull refuses flat or degenerate point sets
+        raise ObjectError(f"the mesh has no convex hull: {str(exc).splitlines()[0]}") from None
+    depth = _hull_depths(pts, np.asarray(hull.equations, dtype=float), chunk_cells)
+    if len(pts) > max_points:
+        pts, depth = _thinned(pts, depth, rho / 4.0)
+    tree = cKDTree(pts)
+    rng = np.random.default_rng(0)
+    some = rng.choice(len(pts), size=min(samples, len(pts)), replace=False)
+    spreads = [
+        float(np.std(depth[near]))
+        for near in tree.query_ball_point(pts[some], rho)
+        if len(near) > 3
+    ]
+    roughness = float(np.median(spreads)) if spreads else 0.0
+    limit = stop_above + (roughness_sigmas or 0.0) * roughness
+    order = np.argsort(-depth)
+    worst = 0.0
+    block = 512
+    for i in range(0, len(order), block):
+        idx = order[i : i + block]
+        idx = idx[depth[idx] > worst]
+        if len(idx) == 0:
+            break  # every remaining point is shallower than the answer already found
+        found = tree.query_ball_point(pts[idx], rho)
+        counts = np.fromiter((len(f) for f in found), dtype=np.intp, count=len(found))
+        p = np.repeat(idx, counts)
+        q = np.fromiter(itertools.chain.from_iterable(found), dtype=np.intp, count=len(p))
+        # Distance across the surface: the depth difference is the normal component.
+        r2 = np.sum((pts[q] - pts[p]) ** 2, axis=1) - (depth[q] - depth[p]) ** 2
+        reach = depth[q] + rho - np.sqrt(np.clip(rho * rho - r2, 0.0, None))
+        starts = np.concatenate([[0], np.cumsum(counts)[:-1]])
+        worst = max(worst, float(np.minimum.reduceat(reach, starts).max()))
+        if worst > limit:
+            break
+    return Concavity(worst, roughness)
+
+
 def _coacd_parts(
     mesh: trimesh.Trimesh, threshold: float, seed: int, options: Mapping[str, Any]
 ) -> list[ConvexPart]:
@@ -214,6 +365,16 @@ def _coacd_parts(
     return parts
 
 
+def _nearly_convex(mesh: trimesh.Trimesh, name: str, tip_radius: float | None, tol: float) -> bool:
+    if tip_radius is None or tol <= 0:
+        return False
+    try:
+        c = felt_concavity(mesh, tip_radius, roughness_sigmas=ROUGHNESS_SIGMAS, stop_above=tol)
+    except ObjectError as exc:
+        raise ObjectError(f"{name}: {exc}") from None
+    return c.depth <= tol + ROUGHNESS_SIGMAS * c.roughness
+
+
 def convex_parts(
     mesh: trimesh.Trimesh,
     *,
@@ -223,6 +384,8 @@ def convex_parts(
     coacd_threshold: float = 0.05,
     coacd_options: Mapping[str, Any] | None = None,
     seed: int = 0,
+    tip_radius: float | None = None,
+    concavity_tol: float = 0.0,
 ) -> tuple[ConvexPart, ...]:
     """The convex parts of ``mesh`` (world coordinates), exact for convex and orthogonal meshes.
 
@@ -242,6 +405,12 @@ def convex_parts(
         Further keyword arguments of ``coacd.run_coacd`` (e.g. ``mcts_iterations``).
     seed
         CoACD's random seed (the decomposition is deterministic for a seed).
+    tip_radius, concavity_tol
+        A mesh that is neither convex nor orthogonal is taken as its convex hull (one part)
+        when a tip of radius ``tip_radius`` reaches no deeper than ``concavity_tol`` metres
+        under the hull beyond the surface's roughness (:func:`felt_concavity`: depth ≤
+        ``concavity_tol`` + :data:`ROUGHNESS_SIGMAS` × roughness); without a tip radius, or
+        with a tolerance of 0, it always goes through CoACD.
     """
     _check_mesh(mesh, name)
     frame = orthogonal_frame(mesh)
@@ -258,6 +427,10 @@ def convex_parts(
             return tuple(_box_parts(mesh, frame, max_cells))
         except ObjectError as exc:
             raise ObjectError(f"{name}: {exc}") from None
+    elif _nearly_convex(mesh, name, tip_radius, concavity_tol):
+        v = np.asarray(mesh.vertices, dtype=float)
+        hull_v = v[np.unique(np.asarray(ConvexHull(v).simplices))]
+        parts = [ConvexPart(kind="mesh", centre=hull_v.mean(axis=0), vertices=hull_v)]
     else:
         parts = _coacd_parts(mesh, coacd_threshold, seed, coacd_options or {})
     for part in parts:

@@ -61,7 +61,7 @@ from tactile_kb.touch.world import (
     Workspace,
     default_workspace,
 )
-from tactile_kb_mujoco.parts import MAX_HULL_VERTICES, ConvexPart, convex_parts
+from tactile_kb_mujoco.parts import CONCAVITY_RHO, MAX_HULL_VERTICES, ConvexPart, convex_parts
 from tactile_kb_mujoco.scene import SceneOptions, scene_xml
 
 __all__ = ["MujocoWorld"]
@@ -135,6 +135,11 @@ class MujocoWorld:
         The object's convex parts, if already computed (:func:`convex_parts`).
     max_hull_vertices
         A convex part with more hull vertices is refused (:class:`ObjectError`).
+    concavity_tol
+        A mesh that is neither convex nor orthogonal is collided as its convex hull when the
+        tip reaches no deeper than this under the hull beyond the surface's roughness
+        (:func:`~tactile_kb_mujoco.parts.convex_parts`), metres; default
+        :data:`~tactile_kb_mujoco.parts.CONCAVITY_RHO` tip radii; 0 always decomposes it.
     """
 
     def __init__(
@@ -155,6 +160,7 @@ class MujocoWorld:
         options: SceneOptions | None = None,
         parts: Sequence[ConvexPart] | None = None,
         max_hull_vertices: int = MAX_HULL_VERTICES,
+        concavity_tol: float | None = None,
     ) -> None:
         if speed <= 0 or press < 0 or resolution <= 0:
             raise UsageError("press must be ≥ 0, speed and resolution > 0")
@@ -171,7 +177,15 @@ class MujocoWorld:
         self.parts = (
             tuple(parts)
             if parts is not None
-            else convex_parts(mesh, name=name, max_hull_vertices=max_hull_vertices)
+            else convex_parts(
+                mesh,
+                name=name,
+                max_hull_vertices=max_hull_vertices,
+                tip_radius=finger.radius,
+                concavity_tol=(
+                    CONCAVITY_RHO * finger.radius if concavity_tol is None else concavity_tol
+                ),
+            )
         )
         b = np.asarray(mesh.bounds, dtype=float)
         self._workspace = workspace or default_workspace(b, finger.radius)

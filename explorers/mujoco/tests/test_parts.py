@@ -7,7 +7,7 @@ import itertools
 import numpy as np
 import pytest
 import trimesh
-from tactile_kb_mujoco.parts import convex_parts, orthogonal_frame, winding_number
+from tactile_kb_mujoco.parts import convex_parts, felt_concavity, orthogonal_frame, winding_number
 
 from tactile_kb import solids
 from tactile_kb.errors import ObjectError
@@ -117,3 +117,69 @@ def test_too_many_hull_vertices():
     ball = solids.sphere(0.05, subdivisions=2)
     with pytest.raises(ObjectError, match=r"ball: a convex part has 162 hull vertices, more than"):
         convex_parts(ball, name="ball", max_hull_vertices=100)
+
+
+def _fine_box() -> trimesh.Trimesh:
+    box = solids.box(0.08, 0.06, 0.04)
+    v, f = trimesh.remesh.subdivide_to_size(box.vertices, box.faces, max_edge=0.002)
+    return trimesh.Trimesh(v, f)
+
+
+def _dented(depth: float) -> trimesh.Trimesh:
+    """The fine box with a spherical dent (radius 5 cm, wider than the tip) ``depth`` deep in
+    its top face."""
+    ball = trimesh.creation.icosphere(subdivisions=5, radius=0.05)
+    ball.apply_translation((0.0, 0.0, 0.04 + 0.05 - depth))
+    out: trimesh.Trimesh = trimesh.boolean.difference([_fine_box(), ball])
+    return out
+
+
+def _grooved(radius: float) -> trimesh.Trimesh:
+    """The fine box with a half-round groove of ``radius`` across its top face."""
+    rod = trimesh.creation.cylinder(radius=radius, height=0.1, sections=64)
+    rod.apply_transform(trimesh.transformations.rotation_matrix(np.pi / 2, (0, 1, 0)))
+    rod.apply_translation((0.0, 0.0, 0.04))
+    out: trimesh.Trimesh = trimesh.boolean.difference([_fine_box(), rod])
+    return out
+
+
+def test_felt_concavity_of_a_wide_dent_is_its_depth():
+    c = felt_concavity(_dented(0.003), 0.005)
+    assert c.depth == pytest.approx(0.003, abs=2e-5)  # the 5 cm ball's cap is wider than the tip
+    assert c.roughness == pytest.approx(0.0, abs=1e-6)
+
+
+def test_felt_concavity_of_a_narrow_groove_is_how_far_the_tip_sinks_into_it():
+    rho, a = 0.005, 0.002
+    c = felt_concavity(_grooved(a), rho)
+    sag = rho - np.sqrt(rho**2 - a**2)  # the tip resting on both rims, 2 mm from the axis
+    assert sag < c.depth < sag + 0.2e-3  # the rim is sampled at the mesh's 2 mm spacing
+    assert c.depth < a  # the groove is 2 mm deep; the 5 mm tip never reaches its bottom
+
+
+def test_felt_concavity_of_an_l_shape_is_its_notch():
+    ell = solids.l_shape(0.06, 0.05, 0.02, 0.03)  # the short arm's end is 1 cm under the hull
+    c = felt_concavity(ell, 0.005)
+    assert c.depth == pytest.approx(0.01, abs=1e-9)
+    assert c.roughness == 0.0
+
+
+def test_a_scan_of_a_convex_solid_is_one_hull():
+    from tactile_kb.perturb import perturb
+
+    ideal = solids.box(0.08, 0.06, 0.04)
+    scan = perturb(ideal, 2, seed=1)
+    assert not scan.is_convex
+    assert orthogonal_frame(scan) is None
+    (part,) = convex_parts(scan, tip_radius=0.005, concavity_tol=0.005)
+    assert part.kind == "mesh"
+    hull = trimesh.convex.convex_hull(scan.vertices)
+    assert part.volume == pytest.approx(hull.volume, rel=1e-9)
+    assert len(part.vertices) == len(hull.vertices)  # only the hull's vertices are kept
+    # A tolerance below the 3 mm dent sends the dented box to the decomposition instead.
+    dented = _dented(0.003)
+    assert felt_concavity(dented, 0.005).depth > 0.002
+    (one,) = convex_parts(dented, tip_radius=0.005, concavity_tol=0.005)
+    assert one.volume == pytest.approx(trimesh.convex.convex_hull(dented.vertices).volume)
+    fast = {"mcts_iterations": 20, "mcts_max_depth": 2, "resolution": 500}
+    assert len(convex_parts(dented, tip_radius=0.005, concavity_tol=0.002, coacd_options=fast)) > 1
