@@ -315,9 +315,16 @@ class FeatureSettings(_Group):
         10.0,
         gt=0,
         lt=180,
-        description="Degrees: two contacts inside one face (away from its edges) whose sensor "
-        "directions differ by more than this mean curved (a plane fires the same sensors "
-        "everywhere but near its edges).",
+        description="Degrees: a face turning by more than this between its interior contacts is "
+        "curved; measured from the tip centres where they can tell (to three standard errors), "
+        "else the sensors' spread counts as one gentle fold towards min_smooth_edges.",
+    )
+    bend_sigma_rho: float = Field(
+        0.02,
+        gt=0,
+        description="Tip radii: the least scatter of tip centres (surface detail, the world's "
+        "numerics) assumed when a face's turn is measured from them, if the record declares "
+        "less noise.",
     )
     min_sagitta_contacts: int = Field(
         8,

@@ -106,6 +106,27 @@ def test_labels_hold_with_half_a_millimetre_of_noise(
     assert result.decision.label == label, f"{name}: {result.decision.explanation}"
 
 
+# Faces turned between two equator sensors of the 33-sensor finger: one layer fires a sensor,
+# the next the mean of it and its neighbour, so two contacts inside one flat face read 15°
+# apart. Their tip centres lie on one plane: flat faces, whatever the sensors say.
+BETWEEN_SENSORS = [
+    ("cube 89 mm", _turned(solids.box(0.0891, 0.0891, 0.0891), 310.9), "cube"),
+    ("octagonal prism", _turned(solids.prism(8, 0.0442, 0.0218), 132.7), "prism"),
+    ("small hexagonal pyramid", _turned(solids.pyramid(6, 0.0152, 0.02), 52.8), "pyramid"),
+]
+
+
+@pytest.mark.parametrize("noise", [0.0, NOISE])
+@pytest.mark.parametrize(
+    ("name", "mesh", "label"), BETWEEN_SENSORS, ids=[c[0] for c in BETWEEN_SENSORS]
+)
+def test_a_face_between_two_sensors_is_not_curved(
+    name: str, mesh: trimesh.Trimesh, label: str, noise: float
+) -> None:
+    result = classify(mesh, rules="polyhedra", noise=noise, seed=0)
+    assert result.decision.label == label, f"{name}: {result.decision.explanation}"
+
+
 @pytest.mark.parametrize("seed", [0, 1, 2])
 def test_the_small_cube_of_fig5_is_a_cube_with_noise(seed: int) -> None:
     # CUBE11, the 3 cm cube of the paper's Fig. 5, with the paper's rules

@@ -24,8 +24,10 @@ parameter                      meaning                                          
 ``sagitta_tol``                bending (m) of a face's tip centres over the face    max(0.5 ρ,
                                meaning curved (:func:`face_sagitta`)                3 % extent,
                                                                                     4σ)
-``spread_deg``                 directions of two contacts inside one face (away     10°
-                               from its edges) further apart mean curved
+``spread_deg``                 turn of a face between two contacts inside it        10°
+                               (away from its edges) that fired different sensors,
+                               measured from the tip centres (:func:`spread_bend`),
+                               meaning curved
 ``smooth_deg``                 edges whose normals differ by less are "smooth"      35°
 ``min_smooth_edges``           that many smooth edges mean curved                   6
 ``rel_tol``                    relative spread of lengths counted as equal          0.06
@@ -108,6 +110,7 @@ __all__ = [
     "perpendicularity_table",
     "section_at",
     "side_count",
+    "spread_bend",
 ]
 
 FeatureFn = Callable[..., bool]
@@ -136,8 +139,8 @@ SAGITTA_FRACTION = DEFAULTS.features.sagitta_fraction
 face is 1 %; a cylinder's face seen by one sensor, 25° of arc, bends by 5.5 % of its width)."""
 MIN_SAGITTA_CONTACTS = DEFAULTS.features.min_sagitta_contacts
 SPREAD_DEG = DEFAULTS.features.spread_deg
-"""Contacts inside one face whose directions differ by more than this mean curved."""
-"""Fewer contacts on a face do not determine its bending (a quadric has six unknowns)."""
+"""A face whose tip centres turn by more than this between two interior contacts that fired
+different sensors is curved (:func:`spread_bend`)."""
 SMOOTH_DEG = DEFAULTS.features.smooth_deg
 MIN_SMOOTH_EDGES = DEFAULTS.features.min_smooth_edges
 REL_TOL = DEFAULTS.features.rel_tol
@@ -471,12 +474,17 @@ def surface_curved(
 
     Both tolerances are relative by default: :data:`RESIDUAL_RHO` × the tip radius, and the
     larger of :data:`SAGITTA_RHO` × the tip radius and :data:`SAGITTA_FRACTION` × the face's
-    extent; never below 3 (residual) or 4 (sagitta) σ of the record's declared noise. Which
-    sensors fired matters only inside a face: a touch near a (rounded) edge of any real box
-    fires a neighbouring sensor, so contacts of one face firing sensors more than
-    ``spread_deg`` apart mean curved only when both lie further than ρ·sin(spread) plus the
-    largest edge rounding (``geometry.edge_rounding`` (:mod:`tactile_kb.settings`) × the face's width) from
-    the face's edges (:func:`interior_spread_deg`)."""
+    extent; never below 3 (residual) or 4 (sagitta) σ of the record's declared noise.
+
+    Which sensors fired matters only inside a face, and only as a hint: a touch near a
+    (rounded) edge of any real box fires a neighbouring sensor, so only contacts further than
+    ρ·sin(spread) plus the largest edge rounding (``geometry.edge_rounding``
+    (:mod:`tactile_kb.settings`) × the face's width) from the face's edges count
+    (:func:`interior_spread_deg`), and a flat face turned between two sensors fires either.
+    Where such contacts fired sensors more than ``spread_deg`` apart, the face's interior tip
+    centres measure its turn (:func:`spread_bend`): above ``spread_deg``, curved; below, the
+    sensors' quantisation. Where the centres cannot tell (on two lines, fewer than four),
+    the face counts as one gentle fold towards ``min_smooth_edges``."""
     if smooth_deg is None:
         smooth_deg = current().features.smooth_deg
     if spread_deg is None:
@@ -508,7 +516,8 @@ def surface_curved(
         )
         if sag > tol:
             return True
-    if interior_spread_deg(model) > spread_deg:
+    bent, folds = _spread_evidence(model, spread_deg)
+    if bent:
         return True
     p = model.polyhedron
     cos_smooth = math.cos(math.radians(smooth_deg))
@@ -522,27 +531,37 @@ def surface_curved(
         np.fill_diagonal(c, -1.0)
         return int((c.max(axis=1) > cos_smooth).sum()) >= min_smooth_edges
     smooth = int((_edge_cosines(model, p) > cos_smooth).sum())
-    return smooth >= min_smooth_edges
+    return smooth + folds >= min_smooth_edges
 
 
-def interior_spread_deg(model: ObjectModel) -> float:
-    """Largest angle (degrees) between the contact directions of two contacts of one
-    polyhedron face, both inside the face: further from each of its edges than ρ·sin of
-    their angle plus the edge rounding allowance (``geometry.edge_rounding`` (:mod:`tactile_kb.settings`) ×
-    the face's width). A plane fires the same sensors everywhere but near its edges; a
-    curved wall merged into one face fires several across it. 0 without a polyhedron."""
+@dataclass(frozen=True)
+class _Spread:
+    angle: float  # largest angle (degrees) between two interior contacts' directions
+    pair: tuple[int, int]  # the two contacts (record indices) that make it, or (-1, -1)
+    interior: tuple[int, ...]  # the face's contacts away from its edges (record indices)
+
+
+def _face_spreads(model: ObjectModel) -> list[_Spread]:
+    """Per polyhedron face, the largest angle between the directions of two of its contacts
+    that both lie inside the face, those two contacts, and the contacts inside the face.
+
+    A contact is inside when it is further from each of the face's edges than ρ·sin of its
+    largest angle to another contact of the face (the tip touches the face, not the edge,
+    before its direction turns that far) plus the edge rounding allowance
+    (``geometry.edge_rounding`` × the face's width)."""
     p = model.polyhedron
     if p is None or not model.face_of:
-        return 0.0
+        return []
 
-    def compute() -> float:
+    def compute() -> list[_Spread]:
         assert p is not None
-        worst = 0.0
+        out: list[_Spread] = []
         contacts = model.record.contacts
         rho = model.record.tip_radius
         for fi, poly in enumerate(p.faces):
             face = model.faces[model.face_of[fi]]
             if len(face.contacts) < 2:
+                out.append(_Spread(0.0, (-1, -1), tuple(face.contacts)))
                 continue
             v = p.vertices[list(poly)]
             n = p.normals[fi]
@@ -555,14 +574,114 @@ def interior_spread_deg(model: ObjectModel) -> float:
             _, _, vt = np.linalg.svd(centred, full_matrices=False)
             width = float(np.ptp(centred @ vt[1]))
             ang = np.degrees(np.arccos(np.clip(d @ d.T, -1.0, 1.0)))
-            band = rho * np.sin(np.radians(ang)) + current().geometry.edge_rounding * width
+            rounding = current().geometry.edge_rounding * width
+            band = rho * np.sin(np.radians(ang)) + rounding
             inside = (edge_dist[:, None] > band) & (edge_dist[None, :] > band)
-            if inside.any():
-                worst = max(worst, float(ang[inside].max()))
-        return worst
+            own = edge_dist > rho * np.sin(np.radians(ang.max(axis=1))) + rounding
+            interior = tuple(int(face.contacts[k]) for k in np.flatnonzero(own))
+            if not inside.any():
+                out.append(_Spread(0.0, (-1, -1), interior))
+                continue
+            masked = np.where(inside, ang, -1.0)
+            a, b = np.unravel_index(int(np.argmax(masked)), masked.shape)
+            pair = (int(face.contacts[a]), int(face.contacts[b]))
+            out.append(_Spread(float(masked[a, b]), pair, interior))
+        return out
 
     return _derived(
-        model, (__name__, current().features, current().geometry, "interior_spread"), compute
+        model, (__name__, current().features, current().geometry, "face_spreads"), compute
+    )
+
+
+def interior_spread_deg(model: ObjectModel) -> float:
+    """Largest angle (degrees) between the contact directions of two contacts of one
+    polyhedron face, both inside the face: further from each of its edges than ρ·sin of
+    their angle plus the edge rounding allowance (``geometry.edge_rounding`` (:mod:`tactile_kb.settings`) ×
+    the face's width). 0 without a polyhedron.
+
+    This reads which sensors fired, and the 33-sensor finger quantises directions (its
+    sensors lie 30° apart; a face turned between two of them fires either, or both, as the
+    approach goes): on its own it is weak evidence. :func:`surface_curved` lets the tip
+    centres decide wherever they can (:func:`spread_bend`)."""
+    return max((s.angle for s in _face_spreads(model)), default=0.0)
+
+
+def spread_bend(model: ObjectModel, face: int) -> tuple[float, float] | None:
+    """The turn of polyhedron face ``face`` measured from its interior tip centres, in the
+    direction its interior sensors spread: ``(turn, sigma)`` in degrees, or None when no two
+    interior contacts fired different sensors.
+
+    Tip centres on a plane face lie on the plane offset by ρ, whichever sensor closed; on a
+    surface that turns they fall away from it. Along ``u``, the in-plane direction in which
+    the two most different interior sensor normals differ, the centres' heights are fitted
+    by a plane plus ``a·u²``; the surface then turns by ``−2a·W`` (radians) over the interior
+    contacts' extent ``W`` along ``u`` (positive: convex, as a curved object is). ``sigma`` is
+    its standard error from ``max(σ, features.bend_sigma_rho × ρ)`` (declared noise, or
+    the detail a plane face of this finger may have): infinite when the contacts cannot show
+    a bend at all (on two lines, or fewer than four of them)."""
+    spreads = _face_spreads(model)
+    if not 0 <= face < len(spreads) or spreads[face].pair[0] < 0:
+        return None
+    s = spreads[face]
+    p = model.polyhedron
+    assert p is not None
+    contacts = model.record.contacts
+    n = p.normals[face]
+    d = -np.asarray([contacts[i].direction for i in s.pair], dtype=float)
+    turn = d[1] / np.linalg.norm(d[1]) - d[0] / np.linalg.norm(d[0])
+    u_dir = turn - (turn @ n) * n
+    if len(s.interior) < 4 or float(np.linalg.norm(u_dir)) < 1e-9:
+        return 0.0, math.inf
+    u_dir /= np.linalg.norm(u_dir)
+    v_dir = np.cross(n, u_dir)
+    c = np.asarray([contacts[i].centre for i in s.interior], dtype=float)
+    c = c - c.mean(axis=0)
+    u, v, h = c @ u_dir, c @ v_dir, c @ n
+    width = float(np.ptp(u))
+    if width <= 0:
+        return 0.0, math.inf
+    us, vs = u / width, v / width  # well-conditioned unknowns
+    plane = np.column_stack([np.ones_like(us), us, vs])
+    q = us * us
+    q_perp = q - plane @ np.linalg.lstsq(plane, q, rcond=None)[0]
+    norm2 = float(q_perp @ q_perp)
+    sigma = max(model.record.noise, current().features.bend_sigma_rho * model.record.tip_radius)
+    if norm2 <= 1e-12:
+        return 0.0, math.inf
+    a = float(q_perp @ h) / norm2  # metres per (u/W)²: h ≈ a·(u/W)² + plane
+    # κ = −2a/W², turn over W = κ·W = −2a/W
+    return math.degrees(-2.0 * a / width), math.degrees(2.0 * sigma / (width * math.sqrt(norm2)))
+
+
+def _spread_evidence(model: ObjectModel, spread_deg: float) -> tuple[bool, int]:
+    """What the faces whose interior contacts fired sensors more than ``spread_deg`` apart
+    tell: ``(bent, folds)``.
+
+    Where the tip centres can measure the bend (its standard error at most a third of
+    ``spread_deg``), they decide: ``bent`` when one turns by more than ``spread_deg``, and
+    nothing when the centres lie on their plane (the sensors' quantisation). Where they
+    cannot (the contacts lie on two lines, or are too few), the spread is weak evidence: such
+    a face counts as one gentle fold, as a smooth edge does (``folds``)."""
+
+    def compute() -> tuple[bool, int]:
+        folds = 0
+        for fi, s in enumerate(_face_spreads(model)):
+            if s.angle <= spread_deg:
+                continue
+            found = spread_bend(model, fi)
+            if found is None:
+                continue
+            turn, sigma = found
+            if 3.0 * sigma > spread_deg:
+                folds += 1
+            elif abs(turn) > spread_deg:
+                return True, folds
+        return False, folds
+
+    return _derived(
+        model,
+        (__name__, current().features, current().geometry, "spread_evidence", spread_deg),
+        compute,
     )
 
 
