@@ -187,6 +187,13 @@ class GeometrySettings(_Group):
         description="Metres: contacts whose plane is the table top (normal within 10° of +z, "
         "|offset| below this) are ignored.",
     )
+    robust_rho: float = Field(
+        0.02,
+        gt=0,
+        description="Tip radii: the least scale of the robust plane fit of a face's tip centres "
+        "(else the declared noise, or the centres' own scatter): centres further inside its "
+        "plane than 2.5 scales (touches of an edge beside it) or outside than 4 are left out.",
+    )
     max_refine_deg: float = Field(
         35.0,
         gt=0,

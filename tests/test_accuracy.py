@@ -127,6 +127,16 @@ def test_a_face_between_two_sensors_is_not_curved(
     assert result.decision.label == label, f"{name}: {result.decision.explanation}"
 
 
+@pytest.mark.parametrize(("edge", "angle"), [(0.0307, 335.0), (0.051, 229.9), (0.031, 20.0)])
+def test_a_small_octahedron_is_an_octahedron(edge: float, angle: float) -> None:
+    # a 3 cm octahedron's lower faces are small; touches of the edges and vertices beside
+    # them land in their sensor clusters, and must neither tilt them nor make a neighbour
+    # look concave
+    result = classify(_turned(solids.octahedron(edge), angle), rules="polyhedra", seed=0)
+    assert result.decision.label == "octahedron", result.decision.explanation
+    assert result.planes == 8
+
+
 @pytest.mark.parametrize("seed", [0, 1, 2])
 def test_the_small_cube_of_fig5_is_a_cube_with_noise(seed: int) -> None:
     # CUBE11, the 3 cm cube of the paper's Fig. 5, with the paper's rules

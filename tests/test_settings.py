@@ -33,6 +33,7 @@ DOCUMENTED: dict[str, dict[str, float]] = {
         "span": 0.002,
         "merge_deg": 4.0,
         "table_tol": 0.001,
+        "robust_rho": 0.02,
         "max_refine_deg": 35.0,
         "edge_rounding": 0.10,
         "edge_min_width": 4.0,
