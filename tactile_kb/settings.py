@@ -322,9 +322,10 @@ class FeatureSettings(_Group):
         10.0,
         gt=0,
         lt=180,
-        description="Degrees: a face turning by more than this between its interior contacts is "
-        "curved; measured from the tip centres where they can tell (to three standard errors), "
-        "else the sensors' spread counts as one gentle fold towards min_smooth_edges.",
+        description="Degrees: a face whose interior contacts fired sensors further apart, and "
+        "whose tip centres turn by more than this (by two standard errors), is curved; where "
+        "the centres cannot tell, the spread counts as one gentle fold towards "
+        "min_smooth_edges.",
     )
     bend_sigma_rho: float = Field(
         0.02,

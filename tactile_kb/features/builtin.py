@@ -481,10 +481,10 @@ def surface_curved(
     ρ·sin(spread) plus the largest edge rounding (``geometry.edge_rounding``
     (:mod:`tactile_kb.settings`) × the face's width) from the face's edges count
     (:func:`interior_spread_deg`), and a flat face turned between two sensors fires either.
-    Where such contacts fired sensors more than ``spread_deg`` apart, the face's interior tip
-    centres measure its turn (:func:`spread_bend`): above ``spread_deg``, curved; below, the
-    sensors' quantisation. Where the centres cannot tell (on two lines, fewer than four),
-    the face counts as one gentle fold towards ``min_smooth_edges``."""
+    Where such contacts fired sensors more than ``spread_deg`` apart, the face's tip centres
+    measure its turn (:func:`spread_bend`): beyond ``spread_deg`` by two standard errors,
+    curved; below it by two, the sensors' quantisation. Where the centres cannot tell, the
+    face counts as one gentle fold towards ``min_smooth_edges``."""
     if smooth_deg is None:
         smooth_deg = current().features.smooth_deg
     if spread_deg is None:
@@ -607,18 +607,21 @@ def interior_spread_deg(model: ObjectModel) -> float:
 
 
 def spread_bend(model: ObjectModel, face: int) -> tuple[float, float] | None:
-    """The turn of polyhedron face ``face`` measured from its interior tip centres, in the
-    direction its interior sensors spread: ``(turn, sigma)`` in degrees, or None when no two
-    interior contacts fired different sensors.
+    """The turn of polyhedron face ``face`` measured from its tip centres, in the direction
+    its interior sensors spread: ``(turn, sigma)`` in degrees, or None when no two interior
+    contacts fired different sensors.
 
     Tip centres on a plane face lie on the plane offset by ρ, whichever sensor closed; on a
     surface that turns they fall away from it. Along ``u``, the in-plane direction in which
-    the two most different interior sensor normals differ, the centres' heights are fitted
-    by a plane plus ``a·u²``; the surface then turns by ``−2a·W`` (radians) over the interior
-    contacts' extent ``W`` along ``u`` (positive: convex, as a curved object is). ``sigma`` is
-    its standard error from ``max(σ, features.bend_sigma_rho × ρ)`` (declared noise, or
-    the detail a plane face of this finger may have): infinite when the contacts cannot show
-    a bend at all (on two lines, or fewer than four of them)."""
+    the two most different interior sensor normals differ, the heights of the face's centres
+    are fitted by a plane plus ``a·u²``; the surface then turns by ``−2a/W`` (radians) over
+    the centres' extent ``W`` along ``u`` (positive: convex). Centres well inside the face's
+    plane (touches of an edge beside it, as in :func:`tactile_kb.geometry.planes.fit_face`)
+    are left out, unless more than a quarter would be (then the face bends away itself).
+    ``sigma`` is the turn's standard error from the larger of the declared noise σ,
+    ``features.bend_sigma_rho`` × ρ and the centres' scatter about the bent fit (relief):
+    infinite when the centres cannot show a bend at all (on two lines along ``u``, fewer
+    than five)."""
     spreads = _face_spreads(model)
     if not 0 <= face < len(spreads) or spreads[face].pair[0] < 0:
         return None
@@ -630,11 +633,23 @@ def spread_bend(model: ObjectModel, face: int) -> tuple[float, float] | None:
     d = -np.asarray([contacts[i].direction for i in s.pair], dtype=float)
     turn = d[1] / np.linalg.norm(d[1]) - d[0] / np.linalg.norm(d[0])
     u_dir = turn - (turn @ n) * n
-    if len(s.interior) < 4 or float(np.linalg.norm(u_dir)) < 1e-9:
+    from tactile_kb.geometry.planes import INSIDE_SIGMAS, MAX_REJECTED
+
+    rho = model.record.tip_radius
+    floor = max(model.record.noise, current().features.bend_sigma_rho * rho)
+    # every contact of the face whose centre lies on its plane, not well inside it (a touch
+    # of an edge beside the face: nearer than ρ to its plane)
+    face_contacts = model.faces[model.face_of[face]].contacts
+    c = np.asarray([contacts[i].centre for i in face_contacts], dtype=float)
+    on = c @ n - p.offsets[face] - rho >= -INSIDE_SIGMAS * max(
+        floor, current().geometry.robust_rho * rho
+    )
+    if on.sum() >= (1.0 - MAX_REJECTED) * len(on):  # else the face itself bends away
+        c = c[on]
+    if len(c) < 5 or float(np.linalg.norm(u_dir)) < 1e-9:
         return 0.0, math.inf
     u_dir /= np.linalg.norm(u_dir)
     v_dir = np.cross(n, u_dir)
-    c = np.asarray([contacts[i].centre for i in s.interior], dtype=float)
     c = c - c.mean(axis=0)
     u, v, h = c @ u_dir, c @ v_dir, c @ n
     width = float(np.ptp(u))
@@ -645,10 +660,13 @@ def spread_bend(model: ObjectModel, face: int) -> tuple[float, float] | None:
     q = us * us
     q_perp = q - plane @ np.linalg.lstsq(plane, q, rcond=None)[0]
     norm2 = float(q_perp @ q_perp)
-    sigma = max(model.record.noise, current().features.bend_sigma_rho * model.record.tip_radius)
     if norm2 <= 1e-12:
         return 0.0, math.inf
     a = float(q_perp @ h) / norm2  # metres per (u/W)²: h ≈ a·(u/W)² + plane
+    design = np.column_stack([plane, q])
+    rest = h - design @ np.linalg.lstsq(design, h, rcond=None)[0]
+    scatter = math.sqrt(float(rest @ rest) / (len(h) - 4))  # about the bent fit: relief
+    sigma = max(floor, scatter)
     # κ = −2a/W², turn over W = κ·W = −2a/W
     return math.degrees(-2.0 * a / width), math.degrees(2.0 * sigma / (width * math.sqrt(norm2)))
 
@@ -657,11 +675,11 @@ def _spread_evidence(model: ObjectModel, spread_deg: float) -> tuple[bool, int]:
     """What the faces whose interior contacts fired sensors more than ``spread_deg`` apart
     tell: ``(bent, folds)``.
 
-    Where the tip centres can measure the bend (its standard error at most a third of
-    ``spread_deg``), they decide: ``bent`` when one turns by more than ``spread_deg``, and
-    nothing when the centres lie on their plane (the sensors' quantisation). Where they
-    cannot (the contacts lie on two lines, or are too few), the spread is weak evidence: such
-    a face counts as one gentle fold, as a smooth edge does (``folds``)."""
+    The face's tip centres measure its turn (:func:`spread_bend`). Beyond ``spread_deg`` by
+    two standard errors: ``bent``. Below it by two: nothing, the sensors' quantisation (a
+    flat face turned between two sensors fires either). In between, or where the centres
+    cannot tell at all (on two lines, too few), the spread is weak evidence: the face counts
+    as one gentle fold, as a smooth edge does (``folds``)."""
 
     def compute() -> tuple[bool, int]:
         folds = 0
@@ -672,10 +690,10 @@ def _spread_evidence(model: ObjectModel, spread_deg: float) -> tuple[bool, int]:
             if found is None:
                 continue
             turn, sigma = found
-            if 3.0 * sigma > spread_deg:
-                folds += 1
-            elif abs(turn) > spread_deg:
-                return True, folds
+            if abs(turn) - 2.0 * sigma > spread_deg:
+                return True, folds  # measured: it turns by more than spread_deg
+            if abs(turn) + 2.0 * sigma >= spread_deg:
+                folds += 1  # the centres cannot tell: the sensors' weak evidence
         return False, folds
 
     return _derived(
