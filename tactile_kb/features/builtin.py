@@ -539,6 +539,8 @@ class _Spread:
     angle: float  # largest angle (degrees) between two interior contacts' directions
     pair: tuple[int, int]  # the two contacts (record indices) that make it, or (-1, -1)
     interior: tuple[int, ...]  # the face's contacts away from its edges (record indices)
+    any_angle: float = 0.0  # largest angle between any two of the face's contacts
+    any_pair: tuple[int, int] = (-1, -1)
 
 
 def _face_spreads(model: ObjectModel) -> list[_Spread]:
@@ -579,13 +581,15 @@ def _face_spreads(model: ObjectModel) -> list[_Spread]:
             inside = (edge_dist[:, None] > band) & (edge_dist[None, :] > band)
             own = edge_dist > rho * np.sin(np.radians(ang.max(axis=1))) + rounding
             interior = tuple(int(face.contacts[k]) for k in np.flatnonzero(own))
+            e, f = np.unravel_index(int(np.argmax(ang)), ang.shape)
+            anywhere = (float(ang[e, f]), (int(face.contacts[e]), int(face.contacts[f])))
             if not inside.any():
-                out.append(_Spread(0.0, (-1, -1), interior))
+                out.append(_Spread(0.0, (-1, -1), interior, *anywhere))
                 continue
             masked = np.where(inside, ang, -1.0)
             a, b = np.unravel_index(int(np.argmax(masked)), masked.shape)
             pair = (int(face.contacts[a]), int(face.contacts[b]))
-            out.append(_Spread(float(masked[a, b]), pair, interior))
+            out.append(_Spread(float(masked[a, b]), pair, interior, *anywhere))
         return out
 
     return _derived(
@@ -606,7 +610,9 @@ def interior_spread_deg(model: ObjectModel) -> float:
     return max((s.angle for s in _face_spreads(model)), default=0.0)
 
 
-def spread_bend(model: ObjectModel, face: int) -> tuple[float, float] | None:
+def spread_bend(
+    model: ObjectModel, face: int, *, anywhere: bool = False
+) -> tuple[float, float] | None:
     """The turn of polyhedron face ``face`` measured from its tip centres, in the direction
     its interior sensors spread: ``(turn, sigma)`` in degrees, or None when no two interior
     contacts fired different sensors.
@@ -623,14 +629,18 @@ def spread_bend(model: ObjectModel, face: int) -> tuple[float, float] | None:
     infinite when the centres cannot show a bend at all (on two lines along ``u``, fewer
     than five)."""
     spreads = _face_spreads(model)
-    if not 0 <= face < len(spreads) or spreads[face].pair[0] < 0:
+    if (
+        not 0 <= face < len(spreads)
+        or (spreads[face].any_pair if anywhere else spreads[face].pair)[0] < 0
+    ):
         return None
     s = spreads[face]
+    pair = s.any_pair if anywhere else s.pair
     p = model.polyhedron
     assert p is not None
     contacts = model.record.contacts
     n = p.normals[face]
-    d = -np.asarray([contacts[i].direction for i in s.pair], dtype=float)
+    d = -np.asarray([contacts[i].direction for i in pair], dtype=float)
     turn = d[1] / np.linalg.norm(d[1]) - d[0] / np.linalg.norm(d[0])
     u_dir = turn - (turn @ n) * n
     from tactile_kb.geometry.planes import INSIDE_SIGMAS, MAX_REJECTED
@@ -679,12 +689,18 @@ def _spread_evidence(model: ObjectModel, spread_deg: float) -> tuple[bool, int]:
     two standard errors: ``bent``. Below it by two: nothing, the sensors' quantisation (a
     flat face turned between two sensors fires either). In between, or where the centres
     cannot tell at all (on two lines, too few), the spread is weak evidence: the face counts
-    as one gentle fold, as a smooth edge does (``folds``)."""
+    as one gentle fold, as a smooth edge does (``folds``). So does a face whose contacts fired
+    sensors that far apart only near its edges, when its centres cannot rule the turn out:
+    a small cylinder's faces are too narrow to have an inside, a box's are measured flat."""
 
     def compute() -> tuple[bool, int]:
         folds = 0
         for fi, s in enumerate(_face_spreads(model)):
             if s.angle <= spread_deg:
+                if s.any_angle > spread_deg:  # near its edges only: a fold at most
+                    found = spread_bend(model, fi, anywhere=True)
+                    if found is not None and abs(found[0]) + 2.0 * found[1] >= spread_deg:
+                        folds += 1
                 continue
             found = spread_bend(model, fi)
             if found is None:
