@@ -191,8 +191,8 @@ class GeometrySettings(_Group):
         0.02,
         gt=0,
         description="Tip radii: the least scale of the robust plane fit of a face's tip centres "
-        "(else the declared noise, or the centres' own scatter): centres further inside its "
-        "plane than 2.5 scales (touches of an edge beside it) or outside than 4 are left out.",
+        "(else the declared noise, or the centres' own scatter): centres further than 4 scales "
+        "off its plane (touches of an edge beside it, relief) are left out.",
     )
     max_refine_deg: float = Field(
         35.0,

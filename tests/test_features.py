@@ -506,7 +506,9 @@ def test_a_face_whose_tip_centres_turn_is_curved() -> None:
     truth = _face_turn(bent, fi, 0.12)
     assert truth > 15.0
     turn, sigma = spread_bend(bent, fi)
-    assert turn == pytest.approx(truth, rel=0.2)
+    # measured over the centres on the face's plane (the outermost, bent furthest away, may
+    # be left out as touches beside it): a good part of the true turn, never more
+    assert 0.6 * truth < turn < 1.2 * truth
     assert 3 * sigma < 10.0  # a turn of 10° is measurable: the centres decide
     assert get_feature("surface_curved").fn(bent)
 

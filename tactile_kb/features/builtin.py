@@ -647,15 +647,19 @@ def spread_bend(
 
     rho = model.record.tip_radius
     floor = max(model.record.noise, current().features.bend_sigma_rho * rho)
-    # every contact of the face whose centre lies on its plane, not well inside it (a touch
-    # of an edge beside the face: nearer than ρ to its plane)
+    # every contact of the face whose centre is not well inside the least-squares plane of
+    # them all (a touch of an edge beside the face: nearer than ρ to its plane), at the
+    # scale of their own scatter about it: a bent face's outer centres stay
     face_contacts = model.faces[model.face_of[face]].contacts
     c = np.asarray([contacts[i].centre for i in face_contacts], dtype=float)
-    on = c @ n - p.offsets[face] - rho >= -INSIDE_SIGMAS * max(
-        floor, current().geometry.robust_rho * rho
-    )
-    if on.sum() >= (1.0 - MAX_REJECTED) * len(on):  # else the face itself bends away
-        c = c[on]
+    if len(c) >= 3:
+        mean = c.mean(axis=0)
+        ls_normal = np.linalg.svd(c - mean, full_matrices=False)[2][2]
+        r = (c - mean) @ (ls_normal if ls_normal @ n >= 0 else -ls_normal)
+        scale = max(floor, current().geometry.robust_rho * rho, _mad(r))
+        on = r >= -INSIDE_SIGMAS * scale
+        if on.sum() >= (1.0 - MAX_REJECTED) * len(on):  # else the face itself bends away
+            c = c[on]
     if len(c) < 5 or float(np.linalg.norm(u_dir)) < 1e-9:
         return 0.0, math.inf
     u_dir /= np.linalg.norm(u_dir)
@@ -679,6 +683,11 @@ def spread_bend(
     sigma = max(floor, scatter)
     # κ = −2a/W², turn over W = κ·W = −2a/W
     return math.degrees(-2.0 * a / width), math.degrees(2.0 * sigma / (width * math.sqrt(norm2)))
+
+
+def _mad(r: FloatArray) -> float:
+    """σ of residuals from their median absolute deviation (robust to a few outliers)."""
+    return 1.4826 * float(np.median(np.abs(r - np.median(r))))
 
 
 def _spread_evidence(model: ObjectModel, spread_deg: float) -> tuple[bool, int]:

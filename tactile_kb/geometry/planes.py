@@ -16,7 +16,7 @@ build dozens of sliver faces. :func:`merge_planes` turns the contacts of a recor
    objects made of boxes, or two faces that fired the same sensor) is split in two by
    k-planes iterations, recursively. The fit is robust: centres that lie well inside the
    plane the others share (the tip touched an edge or a vertex beside the face, so its
-   centre is nearer than ρ to the face's plane) are found by soft-L1 reweighting and left
+   centre is nearer than ρ to the face's plane) are found by Cauchy reweighting and left
    out (:data:`INSIDE_SIGMAS`), unless that would leave out more than a quarter of them.
 3. **Merge coplanar faces** (a face whose contacts fired two neighbouring sensors).
 4. **Add the table**: "the equation of the support plane is the same as the equation of the
@@ -111,7 +111,7 @@ MAX_REFINE_DEG = DEFAULTS.geometry.max_refine_deg
 """A fitted normal further than this from the contacts' sensor normal is not trusted."""
 
 
-INSIDE_SIGMAS = 2.5
+INSIDE_SIGMAS = 4.0
 """A tip centre further inside a face's robustly fitted plane than this many times the fit's
 scale touched an edge or a vertex beside the face, not the face (:func:`fit_face`)."""
 
@@ -237,8 +237,8 @@ def _robust_plane(
     scale is the residuals' own (1.4826 × their median absolute deviation: the scatter of a
     scanned surface's detail), at least ``scale`` (the declared noise, or a floor).
 
-    Iteratively reweighted least squares with the soft-L1 loss of ``scale`` (weights
-    ``1/√(1 + (r/scale)²)``) finds the plane most centres lie on; the centres the tip cannot
+    Iteratively reweighted least squares with the Cauchy loss of ``scale`` (weights
+    ``1/(1 + (r/scale)²)``) finds the plane most centres lie on; the centres the tip cannot
     have reached on that plane are rejected and the least-squares plane of the rest returned: those inside it by more than
     :data:`INSIDE_SIGMAS` × ``scale`` (the tip touched an edge or a vertex beside the face: its
     centre is then nearer than ρ to the face's plane) or outside by more than
@@ -250,7 +250,7 @@ def _robust_plane(
     for _ in range(iterations):
         r = (centres - point) @ normal
         scale = max(floor, _mad_sigma(r))
-        w = 1.0 / np.sqrt(1.0 + (r / scale) ** 2)
+        w = 1.0 / (1.0 + (r / scale) ** 2)
         new_point = (w[:, None] * centres).sum(axis=0) / w.sum()
         _, _, vt = np.linalg.svd(np.sqrt(w)[:, None] * (centres - new_point), full_matrices=False)
         new_normal = vt[2] if vt[2] @ normal >= 0 else -vt[2]
@@ -304,7 +304,7 @@ FitFn = Callable[[NDArray[np.intp]], _Fit]
 
 def _fitter(centres: FloatArray, normals: FloatArray, span_min: float, scale: float = 0.0) -> FitFn:
     """``_fit`` of a group of contact indices, computed once per group (keyed by its indices);
-    robust (soft-L1 of ``scale``) when ``scale`` is positive."""
+    robust (:func:`_robust_plane`, least scale ``scale``) when ``scale`` is positive."""
     cache: dict[bytes, _Fit] = {}
 
     def fit(idx: NDArray[np.intp]) -> _Fit:
@@ -574,7 +574,7 @@ def _faces_from_contacts(
     keep = np.flatnonzero(~table)
     if len(keep) == 0:
         return []
-    # the soft-L1 scale of the face fits: the declared noise, or the detail of a flat face
+    # the least scale of the robust face fits: the declared noise, or a flat face's detail
     scale = max(noise, current().geometry.robust_rho * rho)
     fit = _fitter(centres, normals, span_min, scale)
     labels = _normal_clusters(normals[keep], cut)
