@@ -621,9 +621,11 @@ def spread_bend(
     surface that turns they fall away from it. Along ``u``, the in-plane direction in which
     the two most different interior sensor normals differ, the heights of the face's centres
     are fitted by a plane plus ``a·u²``; the surface then turns by ``−2a/W`` (radians) over
-    the centres' extent ``W`` along ``u`` (positive: convex). Centres well inside the face's
-    plane (touches of an edge beside it, as in :func:`tactile_kb.geometry.planes.fit_face`)
-    are left out, unless more than a quarter would be (then the face bends away itself).
+    the centres' extent ``W`` along ``u`` (positive: convex). Centres more than
+    :data:`~tactile_kb.geometry.planes.INSIDE_SIGMAS` scales (their own scatter, 1.4826 × the
+    median absolute deviation) inside the least-squares plane of them all are touches of an
+    edge beside the face and left out, unless more than a quarter would be (then the face
+    bends away itself).
     ``sigma`` is the turn's standard error from the larger of the declared noise σ,
     ``features.bend_sigma_rho`` × ρ and the centres' scatter about the bent fit (relief):
     infinite when the centres cannot show a bend at all (on two lines along ``u``, fewer
