@@ -16,7 +16,7 @@ build dozens of sliver faces. :func:`merge_planes` turns the contacts of a recor
    objects made of boxes, or two faces that fired the same sensor) is split in two by
    k-planes iterations, recursively. The fit is robust: centres that lie well inside the
    plane the others share (the tip touched an edge or a vertex beside the face, so its
-   centre is nearer than ρ to the face's plane) are found by Cauchy reweighting and left
+   centre is nearer than ρ to the face's plane) are found by soft-L1 reweighting and left
    out (:data:`INSIDE_SIGMAS`), unless that would leave out more than a quarter of them.
 3. **Merge coplanar faces** (a face whose contacts fired two neighbouring sensors).
 4. **Add the table**: "the equation of the support plane is the same as the equation of the
@@ -240,8 +240,8 @@ def _robust_plane(
     scale is the residuals' own (1.4826 × their median absolute deviation: the scatter of a
     scanned surface's detail), at least ``scale`` (the declared noise, or a floor).
 
-    Iteratively reweighted least squares with the Cauchy loss of ``scale`` (weights
-    ``1/(1 + (r/scale)²)``) finds the plane most centres lie on; the centres the tip cannot
+    Iteratively reweighted least squares with the soft-L1 loss of ``scale`` (weights
+    ``1/√(1 + (r/scale)²)``) finds the plane most centres lie on; the centres the tip cannot
     have reached on that plane are rejected and the least-squares plane of the rest returned: those inside it by more than
     :data:`INSIDE_SIGMAS` × ``scale`` (the tip touched an edge or a vertex beside the face: its
     centre is then nearer than ρ to the face's plane) or outside by more than
@@ -253,7 +253,7 @@ def _robust_plane(
     for _ in range(iterations):
         r = (centres - point) @ normal
         scale = max(floor, _mad_sigma(r))
-        w = 1.0 / (1.0 + (r / scale) ** 2)
+        w = 1.0 / np.sqrt(1.0 + (r / scale) ** 2)
         new_point = (w[:, None] * centres).sum(axis=0) / w.sum()
         _, _, vt = np.linalg.svd(np.sqrt(w)[:, None] * (centres - new_point), full_matrices=False)
         new_normal = vt[2] if vt[2] @ normal >= 0 else -vt[2]
