@@ -187,6 +187,13 @@ class GeometrySettings(_Group):
         description="Metres: contacts whose plane is the table top (normal within 10° of +z, "
         "|offset| below this) are ignored.",
     )
+    robust_rho: float = Field(
+        0.02,
+        gt=0,
+        description="Tip radii: the least scale of the robust plane fit of a face's tip centres "
+        "(else the declared noise, or the centres' own scatter): centres further than 4 scales "
+        "off its plane (touches of an edge beside it, relief) are left out.",
+    )
     max_refine_deg: float = Field(
         35.0,
         gt=0,
@@ -315,9 +322,17 @@ class FeatureSettings(_Group):
         10.0,
         gt=0,
         lt=180,
-        description="Degrees: two contacts inside one face (away from its edges) whose sensor "
-        "directions differ by more than this mean curved (a plane fires the same sensors "
-        "everywhere but near its edges).",
+        description="Degrees: a face whose interior contacts fired sensors further apart, and "
+        "whose tip centres turn by more than this (by two standard errors), is curved; where "
+        "the centres cannot tell, the spread counts as one gentle fold towards "
+        "min_smooth_edges.",
+    )
+    bend_sigma_rho: float = Field(
+        0.02,
+        gt=0,
+        description="Tip radii: the least scatter of tip centres (surface detail, the world's "
+        "numerics) assumed when a face's turn is measured from them, if the record declares "
+        "less noise.",
     )
     min_sagitta_contacts: int = Field(
         8,

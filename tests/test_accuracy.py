@@ -106,6 +106,48 @@ def test_labels_hold_with_half_a_millimetre_of_noise(
     assert result.decision.label == label, f"{name}: {result.decision.explanation}"
 
 
+# Faces turned between two equator sensors of the 33-sensor finger: one layer fires a sensor,
+# the next the mean of it and its neighbour, so two contacts inside one flat face read 15°
+# apart. Their tip centres lie on one plane: flat faces, whatever the sensors say.
+BETWEEN_SENSORS = [
+    ("cube 89 mm", _turned(solids.box(0.0891, 0.0891, 0.0891), 310.9), "cube"),
+    ("octagonal prism", _turned(solids.prism(8, 0.0442, 0.0218), 132.7), "prism"),
+    ("small hexagonal pyramid", _turned(solids.pyramid(6, 0.0152, 0.02), 52.8), "pyramid"),
+]
+
+
+@pytest.mark.parametrize("noise", [0.0, NOISE])
+@pytest.mark.parametrize(
+    ("name", "mesh", "label"), BETWEEN_SENSORS, ids=[c[0] for c in BETWEEN_SENSORS]
+)
+def test_a_face_between_two_sensors_is_not_curved(
+    name: str, mesh: trimesh.Trimesh, label: str, noise: float
+) -> None:
+    result = classify(mesh, rules="polyhedra", noise=noise, seed=0)
+    assert result.decision.label == label, f"{name}: {result.decision.explanation}"
+
+
+@pytest.mark.parametrize(("edge", "angle"), [(0.0307, 335.0), (0.051, 229.9), (0.031, 20.0)])
+def test_a_small_octahedron_is_an_octahedron(edge: float, angle: float) -> None:
+    # a 3 cm octahedron's lower faces are small; touches of the edges and vertices beside
+    # them land in their sensor clusters, and must neither tilt them nor make a neighbour
+    # look concave
+    result = classify(_turned(solids.octahedron(edge), angle), rules="polyhedra", seed=0)
+    assert result.decision.label == "octahedron", result.decision.explanation
+    assert result.planes == 8
+
+
+@pytest.mark.parametrize(
+    ("radius", "height", "noise", "seed"),
+    [(0.0127, 0.0648, 0.0, 0), (0.0127, 0.0648, NOISE, 0), (0.0123, 0.1357, NOISE, 1)],
+)
+def test_a_small_cylinder_is_curved(radius: float, height: float, noise: float, seed: int) -> None:
+    # a 1.3 cm cylinder's faces, as the 5 mm tip sees them, are too narrow to have an
+    # inside: its sensors spread near their edges, and the centres cannot rule the turn out
+    result = classify(solids.cylinder(radius, height), rules="polyhedra", noise=noise, seed=seed)
+    assert result.decision.label == "curved", result.decision.explanation
+
+
 @pytest.mark.parametrize("seed", [0, 1, 2])
 def test_the_small_cube_of_fig5_is_a_cube_with_noise(seed: int) -> None:
     # CUBE11, the 3 cm cube of the paper's Fig. 5, with the paper's rules

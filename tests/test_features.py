@@ -33,6 +33,7 @@ from tactile_kb.features.builtin import (
     perpendicularity_table,
     section_at,
     side_count,
+    spread_bend,
 )
 from tactile_kb.geometry.model import ObjectModel, build_model
 from tactile_kb.record import ExplorationRecord
@@ -408,9 +409,30 @@ def test_base_and_lateral_edges_do_not_depend_on_the_resting_face(
         assert get_feature("lateral_faces_vertical").fn(model) is parallel
 
 
-def test_a_neighbouring_sensor_near_an_edge_does_not_make_a_face_curved() -> None:
-    # one contact of a face reports a direction 12° off: near the face's edge (a touch on a
-    # rounded edge) it is not evidence of curvature; well inside the face it is
+def _with_contact(
+    rec: ExplorationRecord, i: int, direction: np.ndarray, centre: np.ndarray
+) -> ExplorationRecord:
+    contacts = list(rec.contacts)
+    contacts[i] = contacts[i].model_copy(
+        update={
+            "direction": tuple(float(x) for x in direction),
+            "centre": tuple(float(x) for x in centre),
+            "point": tuple(float(x) for x in centre + FINGER.radius * direction),
+        }
+    )
+    return rec.model_copy(update={"contacts": contacts})
+
+
+def _turned_direction(d: np.ndarray, degrees: float) -> np.ndarray:
+    tilt = np.cross(d, [0.0, 0.0, 1.0]) if abs(d[2]) < 0.9 else np.array([1.0, 0.0, 0.0])
+    tilt /= np.linalg.norm(tilt)
+    return d * math.cos(math.radians(degrees)) + tilt * math.sin(math.radians(degrees))
+
+
+def test_a_neighbouring_sensor_does_not_make_a_plane_face_curved() -> None:
+    # one contact of a face reports a direction 12° off. Near the face's edge (a touch on a
+    # rounded edge) it is not even looked at; well inside the face, the tip centres decide:
+    # on the face's plane they measure no bend, so the sensor's quantisation is no curvature
     rec = sample_record(solids.box(0.08, 0.08, 0.08), FINGER, per_face=8, quantise=False, noise=0.0)
     model = build_model(rec)
     face = model.contact_faces[0]
@@ -418,34 +440,149 @@ def test_a_neighbouring_sensor_near_an_edge_does_not_make_a_face_curved() -> Non
     assert poly is not None
     fi = model.face_of.index(model.faces.index(face))
     corners = poly.vertices[list(poly.faces[fi])]
+    i = face.contacts[0]
+    d = _turned_direction(np.asarray(rec.contacts[i].direction), 12.0)
 
-    def tilted(at: np.ndarray) -> ExplorationRecord:
-        i = face.contacts[0]
-        d = np.asarray(rec.contacts[i].direction)
-        tilt = np.cross(d, [0.0, 0.0, 1.0]) if abs(d[2]) < 0.9 else np.array([1.0, 0.0, 0.0])
-        turned = d * math.cos(math.radians(12)) + tilt / np.linalg.norm(tilt) * math.sin(
-            math.radians(12)
-        )
-        centre = at + FINGER.radius * face.normal_array
-        contacts = list(rec.contacts)
-        contacts[i] = contacts[i].model_copy(
-            update={
-                "direction": tuple(float(x) for x in turned),
-                "centre": tuple(float(x) for x in centre),
-                "point": tuple(float(x) for x in centre + FINGER.radius * turned),
-            }
-        )
-        return rec.model_copy(update={"contacts": contacts})
+    def at(point: np.ndarray) -> ObjectModel:
+        return build_model(_with_contact(rec, i, d, point + FINGER.radius * face.normal_array))
 
     middle = corners.mean(axis=0)
     near_edge = (corners[0] + corners[1]) / 2 + 0.001 * (middle - (corners[0] + corners[1]) / 2)
-    inside = build_model(tilted(middle))
-    at_edge = build_model(tilted(near_edge))
+    inside, at_edge = at(middle), at(near_edge)
     assert not get_feature("surface_curved").fn(model)
-    assert get_feature("surface_curved").fn(inside)
-    assert not get_feature("surface_curved").fn(inside, spread_deg=15.0)
-    assert not get_feature("surface_curved").fn(at_edge)
     assert interior_spread_deg(inside) == pytest.approx(12.0, abs=0.5)
+    turn, sigma = spread_bend(inside, fi)
+    assert abs(turn) < 1e-6
+    assert 3 * sigma < 10.0  # the centres can tell a 10° turn from none
+    assert not get_feature("surface_curved").fn(inside)
+    assert interior_spread_deg(at_edge) == 0.0
+    assert not get_feature("surface_curved").fn(at_edge)
+
+
+def _bent_top(
+    rec: ExplorationRecord, radius: float, *, noise: float = 0.0, seed: int = 0
+) -> ExplorationRecord:
+    """``rec`` with the top face's tip centres (and directions) moved onto a cylinder of
+    ``radius`` about an axis along y at the face's centre: a face that really turns. With
+    ``noise``, Gaussian position noise of that σ is added to them and declared."""
+    rng = np.random.default_rng(seed)
+    model = build_model(rec)
+    top = max(model.contact_faces, key=lambda f: f.normal[2])
+    xs = np.asarray([rec.contacts[i].centre[0] for i in top.contacts])
+    x0 = float(xs.mean())
+    contacts = list(rec.contacts)
+    for i in top.contacts:
+        x, y, z = contacts[i].centre
+        phi = (x - x0) / radius  # the normal's turn at x
+        n = np.array([math.sin(phi), 0.0, math.cos(phi)])
+        c = np.array([x0 + radius * math.sin(phi), y, z - radius * (1 - math.cos(phi))])
+        c = c + rng.normal(0.0, noise, 3) if noise else c
+        contacts[i] = contacts[i].model_copy(
+            update={
+                "centre": tuple(float(v) for v in c),
+                "direction": tuple(float(v) for v in -n),
+                "point": tuple(float(v) for v in c - FINGER.radius * n),
+            }
+        )
+    return rec.model_copy(update={"contacts": contacts, "noise": noise})
+
+
+def _face_turn(model: ObjectModel, fi: int, radius: float) -> float:
+    """The true turn (degrees) of a top bent onto a cylinder of ``radius`` about y, across
+    the contacts of polyhedron face ``fi``."""
+    face = model.faces[model.face_of[fi]]
+    xs = [model.record.contacts[i].centre[0] for i in face.contacts]
+    return math.degrees((max(xs) - min(xs)) / radius)
+
+
+def test_a_face_whose_tip_centres_turn_is_curved() -> None:
+    # the top of a 10 cm box bent onto a cylinder: its normal turns by x/R across it, and its
+    # interior contacts fire directions as far apart; the centres measure that turn
+    rec = sample_record(solids.box(0.1, 0.1, 0.05), FINGER, per_face=14, quantise=False, noise=0.0)
+    assert not get_feature("surface_curved").fn(build_model(rec))
+    bent = build_model(_bent_top(rec, 0.12))
+    assert bent.polyhedron is not None
+    fi = int(np.argmax(bent.polyhedron.normals[:, 2]))
+    truth = _face_turn(bent, fi, 0.12)
+    assert truth > 15.0
+    turn, sigma = spread_bend(bent, fi)
+    # measured over the centres on the face's plane (the outermost, bent furthest away, may
+    # be left out as touches beside it): a good part of the true turn, never more
+    assert 0.6 * truth < turn < 1.2 * truth
+    assert 3 * sigma < 10.0  # a turn of 10° is measurable: the centres decide
+    assert get_feature("surface_curved").fn(bent)
+
+
+def _interior(model: ObjectModel, fi: int) -> set[int]:
+    from tactile_kb.features.builtin import _face_spreads
+
+    return set(_face_spreads(model)[fi].interior)
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_a_bend_just_beyond_the_noise_is_curved_and_a_plane_with_noise_is_not(
+    seed: int,
+) -> None:
+    # A top bent onto a cylinder (R = 30 cm), with 0.1 mm of declared and real position
+    # noise: its contacts' normals turn by 12.5° across it, only a little more than
+    # spread_deg (10°), but by many times what that noise lets the centres measure: curved.
+    # The same face flat, with 0.5 mm of noise, its contacts firing the very same
+    # directions: the centres measure no turn, and it is not curved.
+    rec = sample_record(
+        solids.box(0.15, 0.15, 0.05), FINGER, per_face=80, quantise=False, noise=0.0
+    )
+    bent = build_model(_bent_top(rec, 0.3, noise=0.0001, seed=seed))
+    assert bent.polyhedron is not None
+    fi = int(np.argmax(bent.polyhedron.normals[:, 2]))
+    truth = _face_turn(bent, fi, 0.3)
+    assert 11.0 < truth < 15.0
+    turn, sigma = spread_bend(bent, fi)
+    assert turn == pytest.approx(truth, abs=max(3 * sigma, 0.1 * truth))
+    assert abs(turn) - 2 * sigma > 10.0  # beyond spread_deg, beyond the noise
+    assert get_feature("surface_curved").fn(bent)
+    flat = build_model(_bent_top(rec, 1e6, noise=0.0005, seed=seed))
+    contacts = [
+        c.model_copy(update={"direction": b.direction})
+        for c, b in zip(flat.record.contacts, bent.record.contacts, strict=True)
+    ]
+    flat = build_model(flat.record.model_copy(update={"contacts": contacts}))
+    assert flat.polyhedron is not None
+    fi = int(np.argmax(flat.polyhedron.normals[:, 2]))
+    assert interior_spread_deg(flat) > 10.0
+    turn, sigma = spread_bend(flat, fi)
+    assert abs(turn) < 3 * sigma
+    assert abs(turn) + 2 * sigma < 10.0  # measured: it does not turn
+    assert not get_feature("surface_curved").fn(flat)
+
+
+def test_a_spread_the_centres_cannot_test_counts_as_a_gentle_fold() -> None:
+    # every interior contact of a face on two lines (two layers) fits a plane whatever the
+    # surface does: then a sensor spread inside the face is a fold, one smooth edge's worth
+    rec = sample_record(solids.box(0.08, 0.08, 0.08), FINGER, per_face=8, quantise=False, noise=0.0)
+    model = build_model(rec)
+    face = model.contact_faces[0]
+    fi = model.face_of.index(model.faces.index(face))
+    poly = model.polyhedron
+    assert poly is not None
+    corners = poly.vertices[list(poly.faces[fi])]
+    centre = corners.mean(axis=0)
+    n = face.normal_array
+    along = np.cross(n, [0.0, 0.0, 1.0])
+    along /= np.linalg.norm(along)
+    d0 = np.asarray(rec.contacts[face.contacts[0]].direction)
+    out = rec
+    for k, i in enumerate(face.contacts):  # two horizontal lines, 2 cm apart
+        point = centre + along * (0.02 * (k // 2) - 0.03) + [0.0, 0.0, 0.01 * (-1) ** k]
+        # the sensors turn across the lines (upwards): along it, two lines fit any bend
+        up = d0 * math.cos(math.radians(15.0)) + np.array([0.0, 0.0, math.sin(math.radians(15.0))])
+        d = up / np.linalg.norm(up) if k % 2 else d0
+        out = _with_contact(out, i, d, point + FINGER.radius * n)
+    lines = build_model(out)
+    assert interior_spread_deg(lines) == pytest.approx(15.0, abs=0.5)
+    assert spread_bend(lines, fi)[1] == math.inf
+    curved = get_feature("surface_curved").fn
+    assert not curved(lines)  # one fold is no curved surface
+    assert curved(lines, min_smooth_edges=1)  # it counts as a smooth edge
 
 
 def test_curvature_is_measured_over_the_face() -> None:

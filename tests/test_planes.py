@@ -102,3 +102,28 @@ def test_merge_plane_arrays_equals_merge_planes() -> None:
     assert merge_plane_arrays(rec, arrays, range(len(rec.contacts))) == merge_planes(rec)
     with pytest.raises(UsageError):
         merge_plane_arrays(rec, arrays, range(len(rec.contacts) - 1))
+
+
+def test_touches_of_an_edge_beside_a_face_do_not_tilt_it() -> None:
+    # two of sixteen contacts of a face touched the edge above it: their tip centres lie 1.8 mm
+    # inside the face's plane (nearer than ρ to it). The face's plane is the one its other
+    # centres share, not the least-squares compromise.
+    mesh = solids.box(0.08, 0.06, 0.05)
+    rec = sample_record(mesh, F33, per_face=16, quantise=False, noise=0.0, seed=4)
+    face = next(f for f in merge_planes(rec) if f.normal[0] > 0.99)  # x = 0.04
+    top2 = sorted(face.contacts, key=lambda i: rec.contacts[i].centre[2])[-2:]
+    contacts = list(rec.contacts)
+    for i in top2:
+        x, y, z = contacts[i].centre
+        contacts[i] = contacts[i].model_copy(update={"centre": (x - 0.0018, y, z)})
+    touched = rec.model_copy(update={"contacts": contacts})
+    faces = merge_planes(touched)
+    face = next(f for f in faces if f.normal[0] > 0.9)
+    assert set(top2) <= set(face.contacts)
+    assert math.degrees(math.acos(min(1.0, face.normal[0]))) < 0.01
+    assert face.offset == pytest.approx(0.04, abs=1e-6)
+    # the least-squares plane of the same centres is tilted by them
+    c = np.asarray([touched.contacts[i].centre for i in face.contacts])
+    s = np.tile([1.0, 0.0, 0.0], (len(c), 1))
+    normal, _, _, _ = fit_face(c, s)
+    assert math.degrees(math.acos(min(1.0, float(normal[0])))) > 0.5

@@ -24,8 +24,10 @@ parameter                      meaning                                          
 ``sagitta_tol``                bending (m) of a face's tip centres over the face    max(0.5 ρ,
                                meaning curved (:func:`face_sagitta`)                3 % extent,
                                                                                     4σ)
-``spread_deg``                 directions of two contacts inside one face (away     10°
-                               from its edges) further apart mean curved
+``spread_deg``                 turn of a face between two contacts inside it        10°
+                               (away from its edges) that fired different sensors,
+                               measured from the tip centres (:func:`spread_bend`),
+                               meaning curved
 ``smooth_deg``                 edges whose normals differ by less are "smooth"      35°
 ``min_smooth_edges``           that many smooth edges mean curved                   6
 ``rel_tol``                    relative spread of lengths counted as equal          0.06
@@ -108,6 +110,7 @@ __all__ = [
     "perpendicularity_table",
     "section_at",
     "side_count",
+    "spread_bend",
 ]
 
 FeatureFn = Callable[..., bool]
@@ -136,8 +139,8 @@ SAGITTA_FRACTION = DEFAULTS.features.sagitta_fraction
 face is 1 %; a cylinder's face seen by one sensor, 25° of arc, bends by 5.5 % of its width)."""
 MIN_SAGITTA_CONTACTS = DEFAULTS.features.min_sagitta_contacts
 SPREAD_DEG = DEFAULTS.features.spread_deg
-"""Contacts inside one face whose directions differ by more than this mean curved."""
-"""Fewer contacts on a face do not determine its bending (a quadric has six unknowns)."""
+"""A face whose tip centres turn by more than this between two interior contacts that fired
+different sensors is curved (:func:`spread_bend`)."""
 SMOOTH_DEG = DEFAULTS.features.smooth_deg
 MIN_SMOOTH_EDGES = DEFAULTS.features.min_smooth_edges
 REL_TOL = DEFAULTS.features.rel_tol
@@ -471,12 +474,17 @@ def surface_curved(
 
     Both tolerances are relative by default: :data:`RESIDUAL_RHO` × the tip radius, and the
     larger of :data:`SAGITTA_RHO` × the tip radius and :data:`SAGITTA_FRACTION` × the face's
-    extent; never below 3 (residual) or 4 (sagitta) σ of the record's declared noise. Which
-    sensors fired matters only inside a face: a touch near a (rounded) edge of any real box
-    fires a neighbouring sensor, so contacts of one face firing sensors more than
-    ``spread_deg`` apart mean curved only when both lie further than ρ·sin(spread) plus the
-    largest edge rounding (``geometry.edge_rounding`` (:mod:`tactile_kb.settings`) × the face's width) from
-    the face's edges (:func:`interior_spread_deg`)."""
+    extent; never below 3 (residual) or 4 (sagitta) σ of the record's declared noise.
+
+    Which sensors fired matters only inside a face, and only as a hint: a touch near a
+    (rounded) edge of any real box fires a neighbouring sensor, so only contacts further than
+    ρ·sin(spread) plus the largest edge rounding (``geometry.edge_rounding``
+    (:mod:`tactile_kb.settings`) × the face's width) from the face's edges count
+    (:func:`interior_spread_deg`), and a flat face turned between two sensors fires either.
+    Where such contacts fired sensors more than ``spread_deg`` apart, the face's tip centres
+    measure its turn (:func:`spread_bend`): beyond ``spread_deg`` by two standard errors,
+    curved; below it by two, the sensors' quantisation. Where the centres cannot tell, the
+    face counts as one gentle fold towards ``min_smooth_edges``."""
     if smooth_deg is None:
         smooth_deg = current().features.smooth_deg
     if spread_deg is None:
@@ -508,7 +516,8 @@ def surface_curved(
         )
         if sag > tol:
             return True
-    if interior_spread_deg(model) > spread_deg:
+    bent, folds = _spread_evidence(model, spread_deg)
+    if bent:
         return True
     p = model.polyhedron
     cos_smooth = math.cos(math.radians(smooth_deg))
@@ -522,27 +531,39 @@ def surface_curved(
         np.fill_diagonal(c, -1.0)
         return int((c.max(axis=1) > cos_smooth).sum()) >= min_smooth_edges
     smooth = int((_edge_cosines(model, p) > cos_smooth).sum())
-    return smooth >= min_smooth_edges
+    return smooth + folds >= min_smooth_edges
 
 
-def interior_spread_deg(model: ObjectModel) -> float:
-    """Largest angle (degrees) between the contact directions of two contacts of one
-    polyhedron face, both inside the face: further from each of its edges than ρ·sin of
-    their angle plus the edge rounding allowance (``geometry.edge_rounding`` (:mod:`tactile_kb.settings`) ×
-    the face's width). A plane fires the same sensors everywhere but near its edges; a
-    curved wall merged into one face fires several across it. 0 without a polyhedron."""
+@dataclass(frozen=True)
+class _Spread:
+    angle: float  # largest angle (degrees) between two interior contacts' directions
+    pair: tuple[int, int]  # the two contacts (record indices) that make it, or (-1, -1)
+    interior: tuple[int, ...]  # the face's contacts away from its edges (record indices)
+    any_angle: float = 0.0  # largest angle between any two of the face's contacts
+    any_pair: tuple[int, int] = (-1, -1)
+
+
+def _face_spreads(model: ObjectModel) -> list[_Spread]:
+    """Per polyhedron face, the largest angle between the directions of two of its contacts
+    that both lie inside the face, those two contacts, and the contacts inside the face.
+
+    A contact is inside when it is further from each of the face's edges than ρ·sin of its
+    largest angle to another contact of the face (the tip touches the face, not the edge,
+    before its direction turns that far) plus the edge rounding allowance
+    (``geometry.edge_rounding`` × the face's width)."""
     p = model.polyhedron
     if p is None or not model.face_of:
-        return 0.0
+        return []
 
-    def compute() -> float:
+    def compute() -> list[_Spread]:
         assert p is not None
-        worst = 0.0
+        out: list[_Spread] = []
         contacts = model.record.contacts
         rho = model.record.tip_radius
         for fi, poly in enumerate(p.faces):
             face = model.faces[model.face_of[fi]]
             if len(face.contacts) < 2:
+                out.append(_Spread(0.0, (-1, -1), tuple(face.contacts)))
                 continue
             v = p.vertices[list(poly)]
             n = p.normals[fi]
@@ -555,14 +576,157 @@ def interior_spread_deg(model: ObjectModel) -> float:
             _, _, vt = np.linalg.svd(centred, full_matrices=False)
             width = float(np.ptp(centred @ vt[1]))
             ang = np.degrees(np.arccos(np.clip(d @ d.T, -1.0, 1.0)))
-            band = rho * np.sin(np.radians(ang)) + current().geometry.edge_rounding * width
+            rounding = current().geometry.edge_rounding * width
+            band = rho * np.sin(np.radians(ang)) + rounding
             inside = (edge_dist[:, None] > band) & (edge_dist[None, :] > band)
-            if inside.any():
-                worst = max(worst, float(ang[inside].max()))
-        return worst
+            own = edge_dist > rho * np.sin(np.radians(ang.max(axis=1))) + rounding
+            interior = tuple(int(face.contacts[k]) for k in np.flatnonzero(own))
+            e, f = np.unravel_index(int(np.argmax(ang)), ang.shape)
+            anywhere = (float(ang[e, f]), (int(face.contacts[e]), int(face.contacts[f])))
+            if not inside.any():
+                out.append(_Spread(0.0, (-1, -1), interior, *anywhere))
+                continue
+            masked = np.where(inside, ang, -1.0)
+            a, b = np.unravel_index(int(np.argmax(masked)), masked.shape)
+            pair = (int(face.contacts[a]), int(face.contacts[b]))
+            out.append(_Spread(float(masked[a, b]), pair, interior, *anywhere))
+        return out
 
     return _derived(
-        model, (__name__, current().features, current().geometry, "interior_spread"), compute
+        model, (__name__, current().features, current().geometry, "face_spreads"), compute
+    )
+
+
+def interior_spread_deg(model: ObjectModel) -> float:
+    """Largest angle (degrees) between the contact directions of two contacts of one
+    polyhedron face, both inside the face: further from each of its edges than ρ·sin of
+    their angle plus the edge rounding allowance (``geometry.edge_rounding`` (:mod:`tactile_kb.settings`) ×
+    the face's width). 0 without a polyhedron.
+
+    This reads which sensors fired, and the 33-sensor finger quantises directions (its
+    sensors lie 30° apart; a face turned between two of them fires either, or both, as the
+    approach goes): on its own it is weak evidence. :func:`surface_curved` lets the tip
+    centres decide wherever they can (:func:`spread_bend`)."""
+    return max((s.angle for s in _face_spreads(model)), default=0.0)
+
+
+def spread_bend(
+    model: ObjectModel, face: int, *, anywhere: bool = False
+) -> tuple[float, float] | None:
+    """The turn of polyhedron face ``face`` measured from its tip centres, in the direction
+    its interior sensors spread: ``(turn, sigma)`` in degrees, or None when no two interior
+    contacts fired different sensors.
+
+    Tip centres on a plane face lie on the plane offset by ρ, whichever sensor closed; on a
+    surface that turns they fall away from it. Along ``u``, the in-plane direction in which
+    the two most different interior sensor normals differ, the heights of the face's centres
+    are fitted by a plane plus ``a·u²``; the surface then turns by ``−2a/W`` (radians) over
+    the centres' extent ``W`` along ``u`` (positive: convex). Centres more than
+    :data:`~tactile_kb.geometry.planes.INSIDE_SIGMAS` scales (their own scatter, 1.4826 × the
+    median absolute deviation) inside the least-squares plane of them all are touches of an
+    edge beside the face and left out, unless more than a quarter would be (then the face
+    bends away itself).
+    ``sigma`` is the turn's standard error from the larger of the declared noise σ,
+    ``features.bend_sigma_rho`` × ρ and the centres' scatter about the bent fit (relief):
+    infinite when the centres cannot show a bend at all (on two lines along ``u``, fewer
+    than five)."""
+    spreads = _face_spreads(model)
+    if (
+        not 0 <= face < len(spreads)
+        or (spreads[face].any_pair if anywhere else spreads[face].pair)[0] < 0
+    ):
+        return None
+    s = spreads[face]
+    pair = s.any_pair if anywhere else s.pair
+    p = model.polyhedron
+    assert p is not None
+    contacts = model.record.contacts
+    n = p.normals[face]
+    d = -np.asarray([contacts[i].direction for i in pair], dtype=float)
+    turn = d[1] / np.linalg.norm(d[1]) - d[0] / np.linalg.norm(d[0])
+    u_dir = turn - (turn @ n) * n
+    from tactile_kb.geometry.planes import INSIDE_SIGMAS, MAX_REJECTED
+
+    rho = model.record.tip_radius
+    floor = max(model.record.noise, current().features.bend_sigma_rho * rho)
+    # every contact of the face whose centre is not well inside the least-squares plane of
+    # them all (a touch of an edge beside the face: nearer than ρ to its plane), at the
+    # scale of their own scatter about it: a bent face's outer centres stay
+    face_contacts = model.faces[model.face_of[face]].contacts
+    c = np.asarray([contacts[i].centre for i in face_contacts], dtype=float)
+    if len(c) >= 3:
+        mean = c.mean(axis=0)
+        ls_normal = np.linalg.svd(c - mean, full_matrices=False)[2][2]
+        r = (c - mean) @ (ls_normal if ls_normal @ n >= 0 else -ls_normal)
+        scale = max(floor, current().geometry.robust_rho * rho, _mad(r))
+        on = r >= -INSIDE_SIGMAS * scale
+        if on.sum() >= (1.0 - MAX_REJECTED) * len(on):  # else the face itself bends away
+            c = c[on]
+    if len(c) < 5 or float(np.linalg.norm(u_dir)) < 1e-9:
+        return 0.0, math.inf
+    u_dir /= np.linalg.norm(u_dir)
+    v_dir = np.cross(n, u_dir)
+    c = c - c.mean(axis=0)
+    u, v, h = c @ u_dir, c @ v_dir, c @ n
+    width = float(np.ptp(u))
+    if width <= 0:
+        return 0.0, math.inf
+    us, vs = u / width, v / width  # well-conditioned unknowns
+    plane = np.column_stack([np.ones_like(us), us, vs])
+    q = us * us
+    q_perp = q - plane @ np.linalg.lstsq(plane, q, rcond=None)[0]
+    norm2 = float(q_perp @ q_perp)
+    if norm2 <= 1e-12:
+        return 0.0, math.inf
+    a = float(q_perp @ h) / norm2  # metres per (u/W)²: h ≈ a·(u/W)² + plane
+    design = np.column_stack([plane, q])
+    rest = h - design @ np.linalg.lstsq(design, h, rcond=None)[0]
+    scatter = math.sqrt(float(rest @ rest) / (len(h) - 4))  # about the bent fit: relief
+    sigma = max(floor, scatter)
+    # κ = −2a/W², turn over W = κ·W = −2a/W
+    return math.degrees(-2.0 * a / width), math.degrees(2.0 * sigma / (width * math.sqrt(norm2)))
+
+
+def _mad(r: FloatArray) -> float:
+    """σ of residuals from their median absolute deviation (robust to a few outliers)."""
+    return 1.4826 * float(np.median(np.abs(r - np.median(r))))
+
+
+def _spread_evidence(model: ObjectModel, spread_deg: float) -> tuple[bool, int]:
+    """What the faces whose interior contacts fired sensors more than ``spread_deg`` apart
+    tell: ``(bent, folds)``.
+
+    The face's tip centres measure its turn (:func:`spread_bend`). Beyond ``spread_deg`` by
+    two standard errors: ``bent``. Below it by two: nothing, the sensors' quantisation (a
+    flat face turned between two sensors fires either). In between, or where the centres
+    cannot tell at all (on two lines, too few), the spread is weak evidence: the face counts
+    as one gentle fold, as a smooth edge does (``folds``). So does a face whose contacts fired
+    sensors that far apart only near its edges, when its centres cannot rule the turn out:
+    a small cylinder's faces are too narrow to have an inside, a box's are measured flat."""
+
+    def compute() -> tuple[bool, int]:
+        folds = 0
+        for fi, s in enumerate(_face_spreads(model)):
+            if s.angle <= spread_deg:
+                if s.any_angle > spread_deg:  # near its edges only: a fold at most
+                    found = spread_bend(model, fi, anywhere=True)
+                    if found is not None and abs(found[0]) + 2.0 * found[1] >= spread_deg:
+                        folds += 1
+                continue
+            found = spread_bend(model, fi)
+            if found is None:
+                continue
+            turn, sigma = found
+            if abs(turn) - 2.0 * sigma > spread_deg:
+                return True, folds  # measured: it turns by more than spread_deg
+            if abs(turn) + 2.0 * sigma >= spread_deg:
+                folds += 1  # the centres cannot tell: the sensors' weak evidence
+        return False, folds
+
+    return _derived(
+        model,
+        (__name__, current().features, current().geometry, "spread_evidence", spread_deg),
+        compute,
     )
 
 

@@ -224,7 +224,7 @@ def build_model(
     )
     noise = record.noise
     tol = support_tol if support_tol is not None else max(split_tol or geo.split_tol, 6.0 * noise)
-    points, normals, offsets, supporting = _support(arrays[0], record.tip_radius, faces, tol)
+    points, normals, offsets, supporting = _support(arrays[0], record.tip_radius, faces, tol, noise)
     edge_contacts: tuple[int, ...] = ()
     if edge_rounding is not None and len(faces) >= 5:
         drop = edge_faces(faces, arrays[0], record.tip_radius, noise=noise, rounding=edge_rounding)
@@ -232,7 +232,7 @@ def build_model(
             edge_contacts = tuple(sorted(i for k in drop for i in faces[k].contacts))
             faces = tuple(f for k, f in enumerate(faces) if k not in drop)
             points, normals, offsets, supporting = _support(
-                arrays[0], record.tip_radius, faces, tol
+                arrays[0], record.tip_radius, faces, tol, noise
             )
     options = {
         "cut_deg": cut_deg,
@@ -336,15 +336,29 @@ def build_model(
 
 
 def _support(
-    centres: FloatArray, rho: float, faces: tuple[Face, ...], tol: float
+    centres: FloatArray, rho: float, faces: tuple[Face, ...], tol: float, noise: float = 0.0
 ) -> tuple[FloatArray, FloatArray, FloatArray, list[bool]]:
     """Surface points, face normals and offsets, and which faces support the object (no
-    touched point more than ``tol`` outside their plane)."""
+    touched point more than ``tol`` outside their plane).
+
+    Only the contacts that lie on their own face's plane (tip centre within 3 × the robust
+    fit's scale, ``max(noise, geometry.robust_rho × ρ)``, of it) give surface points for that
+    test: a contact the face's robust fit left out touched an edge or a vertex beside it,
+    not the face, and moved along the face's normal it would land outside a neighbour."""
     points = _surface_points(centres, rho, faces)
     normals = np.asarray([f.normal for f in faces], dtype=float).reshape(-1, 3)
     offsets = np.asarray([f.offset for f in faces], dtype=float)
     if len(points):
-        supporting = [bool(s) for s in (points @ normals.T - offsets).max(axis=0) <= tol]
+        scale = max(noise, current().geometry.robust_rho * rho)
+        on_face = np.concatenate(
+            [
+                np.abs(centres[list(f.contacts)] @ f.normal_array - f.offset - rho) <= 3.0 * scale
+                for f in faces
+                if f.contacts
+            ]
+        )
+        test = points[on_face] if on_face.any() else points
+        supporting = [bool(s) for s in (test @ normals.T - offsets).max(axis=0) <= tol]
     else:
         supporting = [True] * len(faces)
     return points, normals, offsets, supporting

@@ -14,7 +14,10 @@ build dozens of sliver faces. :func:`merge_planes` turns the contacts of a recor
    non-collinear centres; otherwise the sensor plane is kept). A cluster whose centres do not
    fit one plane within ``split_tol`` (two parallel faces at different offsets, as in
    objects made of boxes, or two faces that fired the same sensor) is split in two by
-   k-planes iterations, recursively.
+   k-planes iterations, recursively. The fit is robust: centres that lie well inside the
+   plane the others share (the tip touched an edge or a vertex beside the face, so its
+   centre is nearer than ρ to the face's plane) are found by soft-L1 reweighting and left
+   out (:data:`INSIDE_SIGMAS`), unless that would leave out more than a quarter of them.
 3. **Merge coplanar faces** (a face whose contacts fired two neighbouring sensors).
 4. **Add the table**: "the equation of the support plane is the same as the equation of the
    polyhedron's supported surface", so the plane z = 0 with outward normal (0, 0, −1) is a
@@ -61,6 +64,9 @@ __all__ = [
     "EDGE_MIN_WIDTH",
     "EDGE_ROUNDING",
     "EDGE_SIGMAS",
+    "INSIDE_SIGMAS",
+    "MAX_REJECTED",
+    "OUTSIDE_SIGMAS",
     "TABLE_TOL",
     "Face",
     "contact_arrays",
@@ -106,6 +112,18 @@ EDGE_SIGMAS = DEFAULTS.geometry.edge_sigmas
 
 MAX_REFINE_DEG = DEFAULTS.geometry.max_refine_deg
 """A fitted normal further than this from the contacts' sensor normal is not trusted."""
+
+
+INSIDE_SIGMAS = 4.0
+"""A tip centre further inside a face's robustly fitted plane than this many times the fit's
+scale touched an edge or a vertex beside the face, not the face (:func:`fit_face`)."""
+
+MAX_REJECTED = 0.25
+"""The robust fit of a face rejects at most this fraction of its centres."""
+
+OUTSIDE_SIGMAS = 4.0
+"""A tip centre further outside a face's robustly fitted plane than this many times the fit's
+scale touched relief on it (a plane's centres lie on it, within the noise)."""
 
 
 @dataclass(frozen=True)
@@ -178,7 +196,9 @@ class _Fit:
         return float(np.abs(self.residuals).max()) if len(self.residuals) else 0.0
 
 
-def _fit(centres: FloatArray, sensor_normals: FloatArray, span_min: float) -> _Fit:
+def _fit(
+    centres: FloatArray, sensor_normals: FloatArray, span_min: float, scale: float = 0.0
+) -> _Fit:
     mean_n = sensor_normals.mean(axis=0)
     mean_n /= math.sqrt(float(mean_n @ mean_n))
     mean_c = centres.mean(axis=0)
@@ -191,6 +211,12 @@ def _fit(centres: FloatArray, sensor_normals: FloatArray, span_min: float) -> _F
             math.radians(current().geometry.max_refine_deg)
         ):
             res = (centres - mean_c) @ normal
+            if scale > 0 and m >= 4 and float(np.abs(res).max()) > 2.0 * scale:
+                robust = _robust_plane(centres, normal, mean_c, scale)
+                if robust is not None:
+                    normal, mean_c = robust
+                    normal = normal if normal @ mean_n >= 0 else -normal
+                    res = (centres - mean_c) @ normal
             return _Fit(normal, float(normal @ mean_c), res, True, span)
         line = vt[0]
     elif m == 2:
@@ -204,6 +230,56 @@ def _fit(centres: FloatArray, sensor_normals: FloatArray, span_min: float) -> _F
     normal = normal / np.linalg.norm(normal)
     res = (centres - mean_c) @ normal
     return _Fit(normal, float(normal @ mean_c), res, False, span)
+
+
+def _robust_plane(
+    centres: FloatArray, normal: FloatArray, point: FloatArray, scale: float, iterations: int = 20
+) -> tuple[FloatArray, FloatArray] | None:
+    """The plane of ``centres`` fitted robustly, from the least-squares ``normal`` through
+    ``point``, so that a few centres off the others' plane no longer tilt it. The loss's
+    scale is the residuals' own (1.4826 × their median absolute deviation: the scatter of a
+    scanned surface's detail), at least ``scale`` (the declared noise, or a floor).
+
+    Iteratively reweighted least squares with the soft-L1 loss of ``scale`` (weights
+    ``1/√(1 + (r/scale)²)``) finds the plane most centres lie on; the centres the tip cannot
+    have reached on that plane are rejected and the least-squares plane of the rest returned: those inside it by more than
+    :data:`INSIDE_SIGMAS` × ``scale`` (the tip touched an edge or a vertex beside the face: its
+    centre is then nearer than ρ to the face's plane) or outside by more than
+    :data:`OUTSIDE_SIGMAS` × ``scale`` (relief). None when that would leave fewer than three
+    or reject more than :data:`MAX_REJECTED` of them: the centres are then no plane with a few
+    stray touches (a patch of a curved surface), and when none is rejected: the least-squares
+    plane of all of them stands."""
+    floor = scale
+    for _ in range(iterations):
+        r = (centres - point) @ normal
+        scale = max(floor, _mad_sigma(r))
+        w = 1.0 / np.sqrt(1.0 + (r / scale) ** 2)
+        new_point = (w[:, None] * centres).sum(axis=0) / w.sum()
+        _, _, vt = np.linalg.svd(np.sqrt(w)[:, None] * (centres - new_point), full_matrices=False)
+        new_normal = vt[2] if vt[2] @ normal >= 0 else -vt[2]
+        done = float(new_normal @ normal) > 1.0 - 1e-12
+        normal, point = new_normal, new_point
+        if done:
+            break
+    rejected = False
+    for _ in range(3):
+        r = (centres - point) @ normal
+        scale = max(floor, _mad_sigma(r))
+        keep = (r >= -INSIDE_SIGMAS * scale) & (r <= OUTSIDE_SIGMAS * scale)
+        if keep.all():
+            break
+        rejected = True
+        if keep.sum() < max(3, (1.0 - MAX_REJECTED) * len(centres)):
+            return None  # not a plane with a few stray touches: a curved patch
+        point = centres[keep].mean(axis=0)
+        _, _, vt = np.linalg.svd(centres[keep] - point, full_matrices=False)
+        normal = vt[2] if vt[2] @ normal >= 0 else -vt[2]
+    return (normal, point) if rejected else None
+
+
+def _mad_sigma(r: FloatArray) -> float:
+    """σ of residuals estimated from their median absolute deviation (robust to outliers)."""
+    return 1.4826 * float(np.median(np.abs(r - np.median(r))))
 
 
 def fit_face(
@@ -229,15 +305,16 @@ def _sse(f: _Fit) -> float:
 FitFn = Callable[[NDArray[np.intp]], _Fit]
 
 
-def _fitter(centres: FloatArray, normals: FloatArray, span_min: float) -> FitFn:
-    """``_fit`` of a group of contact indices, computed once per group (keyed by its indices)."""
+def _fitter(centres: FloatArray, normals: FloatArray, span_min: float, scale: float = 0.0) -> FitFn:
+    """``_fit`` of a group of contact indices, computed once per group (keyed by its indices);
+    robust (:func:`_robust_plane`, least scale ``scale``) when ``scale`` is positive."""
     cache: dict[bytes, _Fit] = {}
 
     def fit(idx: NDArray[np.intp]) -> _Fit:
         key = idx.tobytes()
         found = cache.get(key)
         if found is None:
-            found = cache[key] = _fit(centres[idx], normals[idx], span_min)
+            found = cache[key] = _fit(centres[idx], normals[idx], span_min, scale)
         return found
 
     return fit
@@ -500,7 +577,9 @@ def _faces_from_contacts(
     keep = np.flatnonzero(~table)
     if len(keep) == 0:
         return []
-    fit = _fitter(centres, normals, span_min)
+    # the least scale of the robust face fits: the declared noise, or a flat face's detail
+    scale = max(noise, current().geometry.robust_rho * rho)
+    fit = _fitter(centres, normals, span_min, scale)
     labels = _normal_clusters(normals[keep], cut)
     groups: list[NDArray[np.intp]] = []
     for lab in np.unique(labels):
