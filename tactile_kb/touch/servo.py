@@ -62,7 +62,8 @@ import numpy as np
 from tactile_kb.errors import ExplorationError, UsageError
 from tactile_kb.record import Contact, ExplorationRecord, Layer
 from tactile_kb.settings import DEFAULTS, current
-from tactile_kb.touch.world import Motion, Vec3, World
+from tactile_kb.touch.finger import VERTICAL, Orientation
+from tactile_kb.touch.world import Motion, OrientableWorld, Vec3, World
 from tactile_kb.types import FloatArray
 
 __all__ = ["Completer", "Controller", "Ending", "Mark", "Probe", "ServoParams"]
@@ -292,7 +293,12 @@ class Controller:
         self.extra_params = dict(extra_params or {})
         self.finger = world.finger
         self.rho = float(self.finger.radius)
-        self._dirs = self.finger.matrix
+        self.orientation = VERTICAL
+        if isinstance(world, OrientableWorld):
+            self.orientation = world.orientation
+        self._dirs = self.finger.directions_at(self.orientation)
+        self.orientations: list[tuple[int, float, float]] = []
+        self.indexes = 0  # head indexings
         hint = world.hint
         height = max(float(hint.hi[2]), 2.0 * self.rho)
         self.z_step = self.params.z_step or max(0.35 * height, 0.5 * self.rho)
@@ -412,6 +418,7 @@ class Controller:
             kind=kind,
             phase=self._phase,
             layer=self._layer,
+            orientation=(self.orientation.tilt_deg, self.orientation.turn_deg),
         )
         self.contacts.append(c)
         return c
@@ -457,6 +464,7 @@ class Controller:
             + ([f"{self.rides} surface irregularities ridden over"] if self.rides else []),
             ending=self.ending.status if self.ending else "",
             unreachable=list(self.ending.unreachable) if self.ending else [],
+            orientations=list(self.orientations),
         )
 
     # the exploration ---------------------------------------------------------------------------
@@ -558,8 +566,16 @@ class Controller:
         touch is followed by a short slide each way along the surface (more tip centres on it).
         """
         normal = _unit(np.asarray(p.normal, dtype=float))
-        if self.finger.nearest(_v3(-normal)) is None:
-            self._note(f"no sensor of finger {self.finger.name!r} faces a probe ({p.reason})")
+        pose: Orientation | None
+        if isinstance(self.world, OrientableWorld):
+            pose = self.finger.index_for(_v3(normal))
+        else:
+            pose = VERTICAL if self.finger.nearest(_v3(-normal)) is not None else None
+        if pose is None:
+            self._note(
+                f"no sensor of finger {self.finger.name!r} faces a probe ({p.reason}) "
+                "in any pose of its head"
+            )
             return False
         target = np.asarray(p.target, dtype=float)
         hint = self.world.hint
@@ -584,7 +600,7 @@ class Controller:
                 f"a probe ({p.reason}) would start outside the workspace at {_fmt(_v3(far))}"
             )
             return False
-        if not self._go_round(far, p.reason):
+        if not self._go_round(far, p.reason, pose):
             return False
         here = np.asarray(self._last_pos, dtype=float)
         m = self._move(here, -normal, float(np.linalg.norm(far - target)) + p.reach)
@@ -615,8 +631,30 @@ class Controller:
                 break
         return True
 
-    def _go_round(self, goal: FloatArray, why: str) -> bool:
-        """Move from where the finger is to ``goal`` over the top of the hint box."""
+    def _index(self, pose: Orientation, here: FloatArray, why: str) -> bool:
+        """Index the head to ``pose`` with the tip centre at ``here`` (in free space)."""
+        if pose == self.orientation:
+            return True
+        if not isinstance(self.world, OrientableWorld):
+            self._note(f"the world cannot index the head for a probe ({why})")
+            return False
+        try:
+            world = self.world.oriented(pose, _v3(here))
+        except ExplorationError as exc:
+            self._note(f"a probe ({why}): {exc}")
+            return False
+        self.world = world
+        self.orientation = pose
+        self._dirs = self.finger.directions_at(pose)
+        self.indexes += 1
+        if self._last_pos is None or _v3(here) != self._last_pos:
+            self.path.append(_v3(here))
+        self.orientations.append((len(self.path) - 1, pose.tilt_deg, pose.turn_deg))
+        return True
+
+    def _go_round(self, goal: FloatArray, why: str, pose: Orientation | None = None) -> bool:
+        """Move from where the finger is to ``goal`` over the top of the hint box, indexing the
+        head to ``pose`` up there (in free space above the object)."""
         hint = self.world.hint
         safe = float(hint.hi[2]) + self.rho + self.params.approach_margin
         here = np.asarray(self._last_pos, dtype=float)
@@ -645,11 +683,15 @@ class Controller:
             if float(np.linalg.norm(away)) > 0.5:
                 m = self._move_on(here, away, self.rho)
                 here = np.asarray(m.end, dtype=float)
-        for waypoint in (
-            np.array([here[0], here[1], max(safe, float(here[2]))]),
-            np.array([goal[0], goal[1], max(safe, float(goal[2]))]),
-            goal,
+        for leg, waypoint in enumerate(
+            (
+                np.array([here[0], here[1], max(safe, float(here[2]))]),
+                np.array([goal[0], goal[1], max(safe, float(goal[2]))]),
+                goal,
+            )
         ):
+            if leg == 1 and pose is not None and not self._index(pose, here, why):
+                return False
             d = waypoint - here
             length = float(np.linalg.norm(d))
             if length < 1e-9:
