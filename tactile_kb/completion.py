@@ -139,8 +139,8 @@ def completion_probes(model: ObjectModel, *, height_gap: float | None = None) ->
             directions = [d for d in candidates if not (normals @ d >= cos).any()]
         for d in directions:
             d = d / float(np.linalg.norm(d))
-            if d[2] < -0.5:
-                continue  # under the object: the table
+            if d[2] < -0.95:
+                continue  # straight under the object: the table
             if d[2] > 0.9:
                 target = np.array([mid[0], mid[1], hi[2]])
                 probes.append(
@@ -154,6 +154,7 @@ def completion_probes(model: ObjectModel, *, height_gap: float | None = None) ->
         unique = {p.reason: p for p in reversed(probes)}  # the first of each direction
         return [p for p in probes if unique[p.reason] is p]
     poly = model.polyhedron
+    probes += _bottom_probes(model, centres, rho, gap)
     for k, verts in enumerate(poly.faces):
         index = model.face_of[k] if k < len(model.face_of) else -1
         if index < 0:
@@ -163,8 +164,8 @@ def completion_probes(model: ObjectModel, *, height_gap: float | None = None) ->
         if face.source == "contacts" and n[2] >= current().explore.top_nz:
             probes += _top_probes(face, poly.vertices[list(verts)], centres, rho)
             continue
-        if face.source != "contacts" or abs(n[2]) > 0.9 or n[2] < -0.5:
-            continue  # tops, the table, undersides: not probed at another height
+        if face.source != "contacts" or abs(n[2]) > 0.9:
+            continue  # tops and the table: not probed at another height
         zs = centres[list(face.contacts), 2] if face.contacts else np.zeros(0)
         if len(zs) and float(zs.max() - zs.min()) >= gap:
             continue
@@ -195,6 +196,71 @@ def completion_probes(model: ObjectModel, *, height_gap: float | None = None) ->
             )
         )
     return probes
+
+
+def _bottom_probes(
+    model: ObjectModel, centres: FloatArray, rho: float, gap: float
+) -> list[Probe]:
+    """Probes near the table of the sloping faces the model extends down to the table.
+
+    The model closes the envelope with the table, as if the object rested on a face there.
+    A face that is not vertical and meets the table in the model was touched higher up only;
+    the object may turn under it (a prism lying on a side, an icosahedron on a vertex): one
+    probe at the lowest height the tip reaches on it, approached along its normal (the head
+    indexed when the face overhangs). A touch there confirms it; a touch elsewhere is a face
+    not seen yet and reshapes the model.
+    """
+    poly = model.polyhedron
+    if poly is None:
+        return []
+    record = model.record
+    table = [
+        k
+        for k in range(len(poly.faces))
+        if k < len(model.face_of)
+        and model.face_of[k] >= 0
+        and model.faces[model.face_of[k]].source == "table"
+    ]
+    if not table:
+        return []
+    beside = {b for a, b in poly.edge_faces if a in table} | {
+        a for a, b in poly.edge_faces if b in table
+    }
+    points = np.asarray([c.point for c in record.contacts], dtype=float).reshape(-1, 3)
+    out = []
+    for k in sorted(beside - set(table)):
+        index = model.face_of[k] if k < len(model.face_of) else -1
+        if index < 0:
+            continue
+        face = model.faces[index]
+        n = np.asarray(face.normal, dtype=float)
+        if face.source != "contacts" or abs(n[2]) < math.sin(math.radians(3.0)) or n[2] > 0.9:
+            continue  # vertical faces meet the table as the layers saw them; tops do not
+        ring = poly.vertices[list(poly.faces[k])]
+        z0, z1 = float(ring[:, 2].min()), float(ring[:, 2].max())
+        low = max(z0 + 0.5 * rho, 1.5 * rho - rho * float(n[2]))  # the tip stays off the table
+        if low >= z1 - 0.5 * rho:
+            continue
+        touched = points[list(face.contacts), 2] if face.contacts else np.zeros(0)
+        if len(touched) and float(touched.min()) <= low + max(2.0 * rho, gap):
+            continue  # touched near the table already
+        point = _section_point(ring, low)
+        out_h = np.array([n[0], n[1], 0.0])
+        if point is None or float(np.linalg.norm(out_h)) < 1e-6:
+            continue
+        out_h /= float(np.linalg.norm(out_h))
+        # approached horizontally with the tip pointing inwards: what is there (the face, or
+        # a face turning under it) faces the tip's front hemisphere either way
+        out.append(
+            Probe(
+                _v(point + rho * n),
+                _v(out_h),
+                float(np.ptp(poly.vertices[:, 0]) + np.ptp(poly.vertices[:, 1])),
+                f"the face facing {_name(n)} not touched near the table",
+                facing=_v(-out_h),
+            )
+        )
+    return out
 
 
 def _top_probes(face: Face, ring: FloatArray, centres: FloatArray, rho: float) -> list[Probe]:

@@ -238,6 +238,22 @@ class Finger(BaseModel):
         out: NDArray[np.float64] = self.matrix @ orientation.rotation.T
         return out
 
+    def index_towards(self, direction: Sequence[float]) -> Orientation:
+        """The indexed pose whose tip points nearest to ``direction`` (the vertical without a
+        wrist).
+
+        Examples
+        --------
+        >>> builtin_finger("33").index_towards((-1.0, 0.2, 0.0))
+        Orientation(tilt_deg=90.0, turn_deg=165.0)
+        """
+        if self.wrist is None:
+            return VERTICAL
+        d = np.asarray(direction, dtype=float)
+        poses = self.wrist.poses()
+        poles = np.asarray([p.pole for p in poses])
+        return poses[int(np.argmax(poles @ d))]
+
     def index_for(self, normal: Sequence[float]) -> Orientation | None:
         """The head pose for touching a surface whose outward normal is ``normal``.
 

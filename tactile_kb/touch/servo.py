@@ -211,6 +211,10 @@ class Probe:
     """Aim at the middle of the hint box (the visual estimate of where the object is) rather
     than at ``target``'s horizontal position: for a side never touched, where the touched
     points say little about where the object's middle is."""
+    facing: Vec3 | None = None
+    """Where the tip should point during the approach (the head indexed to the pose whose pole
+    is nearest, :meth:`~tactile_kb.touch.finger.Finger.index_towards`), for a probe that may
+    meet a surface of unknown slope; ``None``: the pose that faces ``normal``."""
 
 
 @dataclass(frozen=True)
@@ -564,10 +568,31 @@ class Controller:
         The way there goes up over the hint box, across to above the start of the approach,
         and down to it (each leg in free space: anything met on the way ends the probe). The
         touch is followed by a short slide each way along the surface (more tip centres on it).
+        With the head indexed away from the vertical, the finger then backs out along the
+        approach (a tip under an overhang cannot leave upwards).
+        """
+        start = len(self.path)
+        done = self._probe(p)
+        if not self.orientation.vertical and self._last_pos is not None and len(self.path) > start:
+            here = np.asarray(self._last_pos, dtype=float)
+            normal = _unit(np.asarray(p.normal, dtype=float))
+            if p.facing is not None:
+                normal = -_unit(np.asarray(p.facing, dtype=float))
+            self._move_on(here, normal, self.reach)
+        return done
+
+    def _probe(self, p: Probe) -> bool:
+        """Touch the surface asked for by ``p``; whether a sensor facing it closed.
+
+        The way there goes up over the hint box, across to above the start of the approach,
+        and down to it (each leg in free space: anything met on the way ends the probe). The
+        touch is followed by a short slide each way along the surface (more tip centres on it).
         """
         normal = _unit(np.asarray(p.normal, dtype=float))
         pose: Orientation | None
-        if isinstance(self.world, OrientableWorld):
+        if isinstance(self.world, OrientableWorld) and p.facing is not None:
+            pose = self.finger.index_towards(p.facing)
+        elif isinstance(self.world, OrientableWorld):
             pose = self.finger.index_for(_v3(normal))
         else:
             pose = VERTICAL if self.finger.nearest(_v3(-normal)) is not None else None
