@@ -70,7 +70,8 @@ class CompletionParams:
     Attributes
     ----------
     touches
-        At most this many touches spent by the completion.
+        At most this many touches spent by the completion (or two per face of the model, when
+        that is more; the path budget grows in proportion).
     path
         At most this much tip-centre path (metres) spent by the completion.
     attempts
@@ -380,10 +381,12 @@ class ModelCompleter:
                 f"{what} after {record.touches} touches; unreachable: " + "; ".join(open_items),
                 tuple(open_items),
             )
-        if touches >= self.params.touches or path >= self.params.path:
+        # many-faced objects get two touches a face (an icosahedron: 40)
+        budget = max(self.params.touches, 2 * sum(1 for f in model.faces if f.source == "contacts"))
+        if touches >= budget or path >= self.params.path * budget / self.params.touches:
             return Ending(
                 "budget",
-                f"the completion budget ran out ({touches} of {self.params.touches} touches, "
+                f"the completion budget ran out ({touches} of {budget} touches, "
                 f"{path:.2f} of {self.params.path:g} m of path; {record.touches} touches in "
                 "all): still open: " + "; ".join(open_items),
                 tuple(open_items),
