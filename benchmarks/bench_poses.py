@@ -27,11 +27,11 @@ import trimesh
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
-from bench_accuracy import FAMILIES, NOISE, Family, faces_to_touch  # noqa: E402
+from bench_accuracy import FAMILIES, NOISE, Family, faces_to_touch
 
-from tactile_kb import solids  # noqa: E402
-from tactile_kb.pipeline import classify  # noqa: E402
-from tactile_kb.touch.stepper import StepperExplorer, StepperWorld  # noqa: E402
+from tactile_kb import solids
+from tactile_kb.pipeline import classify
+from tactile_kb.touch.stepper import StepperExplorer, StepperWorld
 
 MIN_PROBABILITY = 0.02
 
@@ -120,8 +120,10 @@ def main() -> None:
     modes = [0.0] if args.exact_only else [0.0, NOISE]
     totals = {m: [0, 0] for m in modes}
     wrong: list[str] = []
-    print(f"{'family':24s} {'mode':6s} {'poses':>5s} {'right':>7s} {'touch/face':>10s} "
-          f"{'s/object':>8s} {'indexed':>7s}")
+    print(
+        f"{'family':24s} {'mode':6s} {'poses':>5s} {'right':>7s} {'touch/face':>10s} "
+        f"{'s/object':>8s} {'indexed':>7s}"
+    )
     for fam in families:
         mesh, label, what = fam.build(rng)
         poses = stable_poses(mesh)

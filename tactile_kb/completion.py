@@ -199,9 +199,7 @@ def completion_probes(model: ObjectModel, *, height_gap: float | None = None) ->
     return probes
 
 
-def _bottom_probes(
-    model: ObjectModel, centres: FloatArray, rho: float, gap: float
-) -> list[Probe]:
+def _bottom_probes(model: ObjectModel, centres: FloatArray, rho: float, gap: float) -> list[Probe]:
     """Probes near the table of the sloping faces the model extends down to the table.
 
     The model closes the envelope with the table, as if the object rested on a face there.
