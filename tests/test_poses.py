@@ -62,7 +62,8 @@ def test_a_ball_stylus_may_have_upper_sensors_and_a_stem() -> None:
         "sensors:\n  - [0, 0, -1]\n"
     )
     f = load_layout(text)
-    assert f.shaft_radius == 0.001 and f.wrist == Wrist()
+    assert f.shaft_radius == 0.001
+    assert f.wrist == Wrist()
     assert max(d[2] for d in f.directions) > 0.7
     # an underside is faced by an upper sensor without indexing
     assert f.index_for((0.0, 0.0, -1.0)) is not None
@@ -73,7 +74,8 @@ def test_index_for_keeps_the_paper_finger_vertical_for_what_it_feels() -> None:
     for n in [(1.0, 0.0, 0.0), (0.0, -1.0, 0.3), (0.6, 0.0, 0.8)]:
         assert f.index_for(n) == VERTICAL
     under = f.index_for((0.5, 0.0, -0.866))  # a face overhanging 60°
-    assert under is not None and not under.vertical
+    assert under is not None
+    assert not under.vertical
     # a sensor of the indexed finger faces the surface, and the shaft leans away from it
     n = np.array([0.5, 0.0, -0.866])
     assert (f.directions_at(under) @ -n).max() >= f.cos_cone
@@ -85,7 +87,8 @@ def test_the_turned_finger_touches_with_the_sensor_facing_the_face() -> None:
     world = StepperWorld(_cube(), builtin_finger("33"))
     turned = world.oriented(Orientation(90.0, 180.0))  # tip pointing +x
     m = turned.move((-0.2, 0.0, 0.05), (1.0, 0.0, 0.0), 0.3)
-    assert m.event == "touch" and m.closed == (0,)  # the pole sensor
+    assert m.event == "touch"
+    assert m.closed == (0,)
     assert m.end[0] == pytest.approx(-0.055, abs=1e-6)
     assert isinstance(world, OrientableWorld)
 
@@ -145,7 +148,8 @@ def test_a_hexagonal_prism_on_its_side_is_a_prism_with_six_sides() -> None:
     assert len(under) == 2
     assert r.record.orientations
     tilted = [c for c in r.record.contacts if c.orientation != (0.0, 0.0)]
-    assert tilted and all(c.orientation[0] > 0 for c in tilted)
+    assert tilted
+    assert all(c.orientation[0] > 0 for c in tilted)
     for f in under:
         assert math.degrees(math.acos(min(1.0, -f.normal[2]))) == pytest.approx(60.0, abs=3.0)
 
@@ -155,4 +159,5 @@ def test_records_without_orientations_still_load() -> None:
         '{"version": 2, "finger": "33", "tip_radius": 0.005, "contacts": [{"step": 1, "centre": [0, 0, 0.01], "sensors": [0],'
         ' "direction": [0, 0, -1], "point": [0, 0, 0.005]}]}'
     )
-    assert rec.orientations == [] and rec.contacts[0].orientation == (0.0, 0.0)
+    assert rec.orientations == []
+    assert rec.contacts[0].orientation == (0.0, 0.0)
