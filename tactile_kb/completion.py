@@ -207,12 +207,13 @@ def _bottom_probes(model: ObjectModel, centres: FloatArray, rho: float, gap: flo
     the object may turn under it (a prism lying on a side, an icosahedron on a vertex): one
     probe at the lowest height the tip reaches on it, approached along its normal (the head
     indexed when the face overhangs). A touch there confirms it; a touch elsewhere is a face
-    not seen yet and reshapes the model.
+    not seen yet and reshapes the model. Asked only when the exploration met the object blind
+    (a contact no sensor felt, noted in the record): the sign of a surface turning under.
     """
     poly = model.polyhedron
-    if poly is None:
-        return []
     record = model.record
+    if poly is None or not any(n.startswith("blind contact") for n in record.notes):
+        return []  # nothing met the finger where no sensor faced: no sign of an undercut
     table = [
         k
         for k in range(len(poly.faces))
@@ -235,6 +236,8 @@ def _bottom_probes(model: ObjectModel, centres: FloatArray, rho: float, gap: flo
         n = np.asarray(face.normal, dtype=float)
         if face.source != "contacts" or abs(n[2]) < math.sin(math.radians(3.0)) or n[2] > 0.9:
             continue  # vertical faces meet the table as the layers saw them; tops do not
+        if -math.sin(math.radians(20.0)) <= n[2] < 0.0:
+            continue  # felt by the vertical finger down to its lowest layer (an octahedron)
         ring = poly.vertices[list(poly.faces[k])]
         z0, z1 = float(ring[:, 2].min()), float(ring[:, 2].max())
         low = max(z0 + 0.5 * rho, 1.5 * rho - rho * float(n[2]))  # the tip stays off the table
@@ -380,8 +383,10 @@ class ModelCompleter:
                 tuple(open_items),
             )
         # many-faced objects get two touches a face (an icosahedron: 40)
-        budget = max(self.params.touches, 2 * sum(1 for f in model.faces if f.source == "contacts"))
-        if touches >= budget or path >= self.params.path * budget / self.params.touches:
+        faces = sum(1 for f in model.faces if f.source == "contacts")
+        budget = max(self.params.touches, 2 * faces) if self.params.touches else 0
+        scale = budget / self.params.touches if self.params.touches else 1.0
+        if touches >= budget or path >= self.params.path * scale:
             return Ending(
                 "budget",
                 f"the completion budget ran out ({touches} of {budget} touches, "
