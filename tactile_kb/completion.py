@@ -41,6 +41,7 @@ import numpy as np
 from tactile_kb.errors import TactileKBError, UsageError
 from tactile_kb.geometry.model import ObjectModel, build_model
 from tactile_kb.geometry.planes import Face
+from tactile_kb.geometry.polyhedron import Polyhedron
 from tactile_kb.record import ExplorationRecord
 from tactile_kb.settings import DEFAULTS, current
 from tactile_kb.touch.explorers import Explorer, WorldExplorer
@@ -73,7 +74,9 @@ class CompletionParams:
         At most this many touches spent by the completion (or two per face of the model, when
         that is more; the path budget grows in proportion).
     path
-        At most this much tip-centre path (metres) spent by the completion.
+        At most this much tip-centre path (metres) spent by the completion, or three times the
+        touched extent per touch of the budget when that is more (each probe goes round the
+        object).
     attempts
         Probes for one open item (a direction, a face) before it counts as unreachable (when
         they found nothing, or what they found did not close it).
@@ -121,13 +124,13 @@ def completion_probes(model: ObjectModel, *, height_gap: float | None = None) ->
     rho = record.tip_radius
     gap = height_gap if height_gap is not None else 0.5 * rho
     centres = np.asarray([c.centre for c in record.contacts], dtype=float).reshape(-1, 3)
+    probes: list[Probe] = _blind_probes(model)
     if len(centres) == 0:
-        return []
+        return probes
     lo, hi = centres.min(axis=0), centres.max(axis=0)
     mid = 0.5 * (lo + hi)
     reach = float(np.linalg.norm(hi - lo)) + 4.0 * rho
     z_mid = max(float(mid[2]), rho + 0.001)
-    probes: list[Probe] = []
     if model.polyhedron is None:
         directions = [np.asarray(d, dtype=float) for d in model.open_directions]
         if not directions:  # contradictory planes: probe every side nothing faces yet
@@ -199,6 +202,83 @@ def completion_probes(model: ObjectModel, *, height_gap: float | None = None) ->
     return probes
 
 
+def _distance_to(poly: Polyhedron, point: FloatArray) -> float:
+    """Distance (m) from ``point`` to the convex polyhedron ``poly`` (negative inside: minus
+    the distance to the nearest face's plane)."""
+    s = poly.normals @ point - poly.offsets
+    if float(s.max()) <= 0.0:
+        return float(s.max())
+    best = math.inf
+    for k, verts in enumerate(poly.faces):
+        if s[k] <= 0.0:
+            continue  # a face turned away from the point is never the nearest
+        ring = poly.vertices[list(verts)]
+        n = poly.normals[k]
+        foot = point - s[k] * n
+        edges = np.roll(ring, -1, axis=0) - ring
+        if (
+            np.einsum("ij,ij->i", np.cross(edges, foot - ring), np.broadcast_to(n, ring.shape)) >= 0
+        ).all():
+            best = min(best, float(s[k]))
+            continue
+        t = np.clip(np.einsum("ij,ij->i", point - ring, edges) / (edges * edges).sum(axis=1), 0, 1)
+        closest = ring + t[:, None] * edges
+        best = min(best, float(np.linalg.norm(closest - point, axis=1).min()))
+    return best
+
+
+def _blind_probes(model: ObjectModel) -> list[Probe]:
+    """Probes at the blind contacts the model does not explain, the head indexed so that the
+    tip points along the blocked motion and up.
+
+    A motion blocked with no sensor closed met the object where no sensor faces: an overhang
+    above the tip (a lying prism's lower side, a pyramid on a lateral face). The model explains
+    it when its surface lies one tip radius from the tip centre there; otherwise the probe
+    approaches the same point along the same direction, the head indexed towards the motion
+    tilted upwards (:meth:`~tactile_kb.touch.finger.Finger.index_towards`), so that a sensor
+    faces what blocked it. Blind contacts closer than 2 ρ to one already listed give no probe.
+    """
+    record = model.record
+    if not record.blind:
+        return []
+    rho = record.tip_radius
+    tol = 0.25 * rho + 3.0 * record.noise
+    poly = model.polyhedron
+    faces = [f for f in model.faces if f.source == "contacts"]
+    out: list[Probe] = []
+    listed: list[FloatArray] = []
+    for point, direction in record.blind:
+        c = np.asarray(point, dtype=float)
+        d = np.asarray(direction, dtype=float)
+        h = np.array([d[0], d[1], 0.0])
+        if float(np.linalg.norm(h)) < 0.5:
+            continue  # blocked going up or down: no horizontal approach reaches it
+        h /= float(np.linalg.norm(h))
+        if any(float(np.linalg.norm(c - q)) < 2.0 * rho for q in listed):
+            continue
+        if poly is not None:
+            explained = abs(_distance_to(poly, c) - rho) <= tol
+        else:
+            explained = any(
+                abs(float(f.normal_array @ c) - f.offset - rho) <= tol
+                and float(f.normal_array @ h) < -0.1
+                for f in faces
+            )
+        if explained:
+            continue
+        listed.append(c)
+        out.append(
+            Probe(
+                _v(c),
+                _v(-h),
+                4.0 * rho,
+                f"a blind contact at {_name(c * 1000.0)} mm",
+                facing=_v((h + np.array([0.0, 0.0, 1.0])) / math.sqrt(2.0)),
+            )
+        )
+    return out
+
+
 def _bottom_probes(model: ObjectModel, centres: FloatArray, rho: float, gap: float) -> list[Probe]:
     """Probes near the table of the sloping faces the model extends down to the table.
 
@@ -208,11 +288,11 @@ def _bottom_probes(model: ObjectModel, centres: FloatArray, rho: float, gap: flo
     probe at the lowest height the tip reaches on it, approached along its normal (the head
     indexed when the face overhangs). A touch there confirms it; a touch elsewhere is a face
     not seen yet and reshapes the model. Asked only when the exploration met the object blind
-    (a contact no sensor felt, noted in the record): the sign of a surface turning under.
+    (``record.blind``, a contact no sensor felt): the sign of a surface turning under.
     """
     poly = model.polyhedron
     record = model.record
-    if poly is None or not any(n.startswith("blind contact") for n in record.notes):
+    if poly is None or not record.blind:
         return []  # nothing met the finger where no sensor faced: no sign of an undercut
     table = [
         k
@@ -386,11 +466,15 @@ class ModelCompleter:
         faces = sum(1 for f in model.faces if f.source == "contacts")
         budget = max(self.params.touches, 2 * faces) if self.params.touches else 0
         scale = budget / self.params.touches if self.params.touches else 1.0
-        if touches >= budget or path >= self.params.path * scale:
+        # a probe goes round the object: large objects get path in proportion to their size
+        centres = np.asarray([c.centre for c in record.contacts], dtype=float).reshape(-1, 3)
+        size = float(np.linalg.norm(np.ptp(centres, axis=0))) if len(centres) else 0.0
+        allowed = max(self.params.path * scale, 3.0 * size * budget)
+        if touches >= budget or path >= allowed:
             return Ending(
                 "budget",
                 f"the completion budget ran out ({touches} of {budget} touches, "
-                f"{path:.2f} of {self.params.path:g} m of path; {record.touches} touches in "
+                f"{path:.2f} of {allowed:.3g} m of path; {record.touches} touches in "
                 "all): still open: " + "; ".join(open_items),
                 tuple(open_items),
             )

@@ -150,6 +150,11 @@ class ExplorationRecord(BaseModel):
         description="(path index, tilt, turn): the head was indexed to (tilt, turn) degrees at "
         "path[index] and kept that pose until the next entry; empty: vertical all along",
     )
+    blind: list[tuple[Vec3, Vec3]] = Field(
+        default_factory=list,
+        description="blind contacts: (tip centre, direction of the motion) where a motion was "
+        "blocked with no sensor closed (the object met where no sensor faces: an overhang)",
+    )
 
     @model_validator(mode="before")
     @classmethod

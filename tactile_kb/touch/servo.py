@@ -302,6 +302,7 @@ class Controller:
             self.orientation = world.orientation
         self._dirs = self.finger.directions_at(self.orientation)
         self.orientations: list[tuple[int, float, float]] = []
+        self.blind: list[tuple[Vec3, Vec3]] = []  # (tip centre, motion direction), no sensor
         self.indexes = 0  # head indexings
         hint = world.hint
         height = max(float(hint.hi[2]), 2.0 * self.rho)
@@ -337,6 +338,8 @@ class Controller:
     def _track(self, m: Motion) -> Motion:
         if m.event in ("touch", "blocked"):
             m = self._reread(m)
+        if m.event == "blocked" and m.kind == "move" and not m.fired and m.distance > 0.0:
+            self.blind.append((m.measured, m.direction))
         self.motions += 1
         self._layer_motions += 1
         if self._last_pos is None or m.start != self._last_pos:
@@ -469,6 +472,7 @@ class Controller:
             ending=self.ending.status if self.ending else "",
             unreachable=list(self.ending.unreachable) if self.ending else [],
             orientations=list(self.orientations),
+            blind=list(self.blind),
         )
 
     # the exploration ---------------------------------------------------------------------------
@@ -575,10 +579,7 @@ class Controller:
         done = self._probe(p)
         if not self.orientation.vertical and self._last_pos is not None and len(self.path) > start:
             here = np.asarray(self._last_pos, dtype=float)
-            normal = _unit(np.asarray(p.normal, dtype=float))
-            if p.facing is not None:
-                normal = -_unit(np.asarray(p.facing, dtype=float))
-            self._move_on(here, normal, self.reach)
+            self._move_on(here, _unit(np.asarray(p.normal, dtype=float)), self.reach)
         return done
 
     def _probe(self, p: Probe) -> bool:
@@ -723,10 +724,38 @@ class Controller:
                 continue
             m = self._move_on(here, d / length, length)
             here = np.asarray(m.end, dtype=float)
+            if leg == 0 and m.event not in ("none", "release", "limit"):
+                # under an overhang (a lying prism's lower side): out of the object's
+                # footprint horizontally, then up
+                m = self._out_and_up(here, safe)
+                here = np.asarray(m.end, dtype=float)
             if m.event not in ("none", "release"):
                 self._note(f"the way to a probe ({why}) is blocked at {_fmt(m.end)} ({m.event})")
                 return False
         return True
+
+    def _out_and_up(self, here: FloatArray, safe: float) -> Motion:
+        """Leave the hint box's footprint horizontally (away from its middle), then rise to
+        ``safe``; the last motion."""
+        hint = self.world.hint
+        lo, hi = np.asarray(hint.lo, dtype=float), np.asarray(hint.hi, dtype=float)
+        away = np.array([here[0] - 0.5 * (lo[0] + hi[0]), here[1] - 0.5 * (lo[1] + hi[1]), 0.0])
+        if float(np.linalg.norm(away)) < 1e-9:
+            away = np.array([1.0, 0.0, 0.0])
+        away = _unit(away)
+        clear = self.rho + self.params.approach_margin
+        out = min(
+            ((hi[k] if away[k] > 0 else lo[k]) - here[k]) / away[k]
+            for k in range(2)
+            if abs(away[k]) > 1e-9
+        )
+        m = self._move_on(here, away, max(float(out), 0.0) + clear)
+        if m.event not in ("none", "release"):
+            return m
+        here = np.asarray(m.end, dtype=float)
+        if safe - float(here[2]) < 1e-9:
+            return m
+        return self._move_on(here, _Z, safe - float(here[2]))
 
     def _first_contact(self) -> tuple[FloatArray, _Follow]:
         """Approach the object horizontally (+x) on lines across the hint until a sensor closes."""
