@@ -758,31 +758,47 @@ class Controller:
         return self._move_on(here, _Z, safe - float(here[2]))
 
     def _first_contact(self) -> tuple[FloatArray, _Follow]:
-        """Approach the object horizontally (+x) on lines across the hint until a sensor closes."""
+        """Approach the object horizontally (+x) on lines across the hint until a sensor closes.
+
+        When every approach along +x met the object only where no sensor faces (a side leaning
+        over the finger: an oblique block on the table), the same lines are tried along −x,
+        then +y and −y."""
         hint = self.world.hint
         gap = self.rho + self.params.approach_margin
-        x0 = float(hint.lo[0]) - gap
-        length = float(hint.size[0]) + 2 * gap
-        yc, qy = float(hint.centre[1]), float(hint.size[1]) / 6.0
-        ys = [yc + k * qy for k in (0.1, 1.1, -0.9, 2.1, -1.9)]
+        lo, hi = np.asarray(hint.lo, dtype=float), np.asarray(hint.hi, dtype=float)
         heights = [self.z_first]
         while heights[-1] + self.z_step < float(hint.hi[2]):
             heights.append(heights[-1] + self.z_step)
-        for z in heights:
-            for y in ys:
-                start = (x0, y, z)
-                if not self.world.workspace.contains(start):
-                    continue
-                m = self._move(start, (1.0, 0.0, 0.0), length)
-                if m.event == "touch":
-                    f = self._follow(m.closed)
-                    self._record(m, f, "touch")
-                    return np.asarray(m.end, dtype=float), f
-                if m.event == "blocked":
-                    self._note(f"blind contact (no sensor fired) at {_fmt(m.end)}")
+        tried = []
+        for axis, sign in ((0, 1.0), (0, -1.0), (1, 1.0), (1, -1.0)):
+            across = 1 - axis
+            x0 = float(lo[axis]) - gap if sign > 0 else float(hi[axis]) + gap
+            length = float(hi[axis] - lo[axis]) + 2 * gap
+            yc, qy = 0.5 * float(lo[across] + hi[across]), float(hi[across] - lo[across]) / 6.0
+            ys = [yc + k * qy for k in (0.1, 1.1, -0.9, 2.1, -1.9)]
+            direction = np.zeros(3)
+            direction[axis] = sign
+            tried.append(f"{'+' if sign > 0 else '-'}{'xy'[axis]}")
+            blind = False
+            for z in heights:
+                for y in ys:
+                    start = np.zeros(3)
+                    start[axis], start[across], start[2] = x0, y, z
+                    if not self.world.workspace.contains(_v3(start)):
+                        continue
+                    m = self._move(_v3(start), _v3(direction), length)
+                    if m.event == "touch":
+                        f = self._follow(m.closed)
+                        self._record(m, f, "touch")
+                        return np.asarray(m.end, dtype=float), f
+                    if m.event == "blocked":
+                        blind = True
+                        self._note(f"blind contact (no sensor fired) at {_fmt(m.end)}")
+            if not blind:
+                break  # nothing there at all: no other side will find it
         raise ExplorationError(
-            f"the finger never touched the object ({len(heights) * len(ys)} approaches along +x "
-            f"at heights {', '.join(f'{h:.3f}' for h in heights)} m)"
+            f"the finger never touched the object ({len(heights) * 5} approaches along "
+            f"{', '.join(tried)} at heights {', '.join(f'{h:.3f}' for h in heights)} m)"
         )
 
     def _tangent(self, f: _Follow) -> FloatArray | None:
