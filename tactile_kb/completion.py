@@ -159,6 +159,7 @@ def completion_probes(model: ObjectModel, *, height_gap: float | None = None) ->
         return [p for p in probes if unique[p.reason] is p]
     poly = model.polyhedron
     probes += _bottom_probes(model, centres, rho, gap)
+    top_touched = max(float(c.point[2]) for c in record.contacts)
     for k, verts in enumerate(poly.faces):
         index = model.face_of[k] if k < len(model.face_of) else -1
         if index < 0:
@@ -181,7 +182,9 @@ def completion_probes(model: ObjectModel, *, height_gap: float | None = None) ->
         # the surface heights the tip can touch on this face, clear of its edges (the tip
         # centre stays 1.5 ρ above the table: scanned bottom edges bulge)
         lo_z = max(z0 + margin, 1.5 * rho - rho * n[2])
-        hi_z = z1 - margin
+        # no higher than the highest point touched: a side's outline above it comes from a
+        # top not known yet (one touched along a line only tilts with its ridge)
+        hi_z = min(z1 - margin, top_touched)
         if hi_z <= lo_z:
             continue
         have = float(zs.mean()) - rho * n[2] if len(zs) else 0.5 * (lo_z + hi_z)

@@ -338,13 +338,19 @@ def build_model(
 def _support(
     centres: FloatArray, rho: float, faces: tuple[Face, ...], tol: float
 ) -> tuple[FloatArray, FloatArray, FloatArray, list[bool]]:
-    """Surface points, face normals and offsets, and which faces support the object (no
-    touched point more than ``tol`` outside their plane)."""
+    """Surface points, face normals and offsets, and which faces support the object: no tip
+    that touched lies wholly beyond their plane, by more than ``tol`` (the ball touched the
+    object there, so the object reaches beyond the plane: a concave face). The tip centres
+    are used, not the surface points estimated from each contact's face: a slide past the
+    end of a face touches its edge, and the point estimated on the face's plane lies beyond
+    the neighbouring face's."""
     points = _surface_points(centres, rho, faces)
     normals = np.asarray([f.normal for f in faces], dtype=float).reshape(-1, 3)
     offsets = np.asarray([f.offset for f in faces], dtype=float)
-    if len(points):
-        supporting = [bool(s) for s in (points @ normals.T - offsets).max(axis=0) <= tol]
+    touched = [i for f in faces for i in f.contacts]
+    if touched:
+        beyond = centres[touched] @ normals.T - offsets - rho
+        supporting = [bool(s) for s in beyond.max(axis=0) <= tol]
     else:
         supporting = [True] * len(faces)
     return points, normals, offsets, supporting
