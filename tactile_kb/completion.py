@@ -155,6 +155,7 @@ def completion_probes(model: ObjectModel, *, height_gap: float | None = None) ->
                 probes.append(
                     Probe(_v(target), _v(d), reach, f"open towards {_name(d)}", middle=True)
                 )
+        probes += _one_height_probes(model, centres, rho, gap)
         unique = {p.reason: p for p in reversed(probes)}  # the first of each direction
         return [p for p in probes if unique[p.reason] is p]
     poly = model.polyhedron
@@ -202,7 +203,53 @@ def completion_probes(model: ObjectModel, *, height_gap: float | None = None) ->
                 f"the face facing {_name(n)} touched at one height",
             )
         )
+    # a face left out as concave but touched at one height: its quantised normal may be what
+    # made it look concave (an overhanging side read as vertical)
+    probes += _one_height_probes(model, centres, rho, gap, concave=True)
     return probes
+
+
+def _one_height_probes(
+    model: ObjectModel, centres: FloatArray, rho: float, gap: float, *, concave: bool = False
+) -> list[Probe]:
+    """For an open model (or, with ``concave``, for the faces a closed one left out as
+    concave): a probe at another height for each side face whose tip centres lie at one
+    height.
+
+    Such a face's normal is the sensor's, quantised (an overhanging side felt by the
+    vertical finger's equator reads as vertical), so the planes may close far from the object
+    or not at all; a second height fits its slope. The other height is 2 ρ (or a quarter of
+    the touched height) below the face's contacts, or above them when that is too near the
+    table, never above the highest point touched.
+    """
+    top = max(float(c.point[2]) for c in model.record.contacts)
+    delta = max(2.0 * rho, 0.25 * top)
+    out = []
+    for k, face in enumerate(model.faces):
+        n = np.asarray(face.normal, dtype=float)
+        if face.source != "contacts" or abs(n[2]) > 0.9 or not face.contacts:
+            continue
+        if concave and (k >= len(model.supporting) or model.supporting[k]):
+            continue
+        pts = centres[list(face.contacts)]
+        if float(np.ptp(pts[:, 2])) >= gap:
+            continue
+        z0 = float(pts[:, 2].mean())
+        lowest = 1.5 * rho
+        z = z0 - delta if z0 - delta >= lowest else z0 + delta
+        if z > top or z < lowest:
+            continue
+        target = pts.mean(axis=0)
+        target[2] = z
+        out.append(
+            Probe(
+                _v(target),
+                _v(n),
+                4.0 * rho + delta,
+                f"the face facing {_name(n)} touched at one height",
+            )
+        )
+    return out
 
 
 def _distance_to(poly: Polyhedron, point: FloatArray) -> float:

@@ -161,3 +161,21 @@ def test_records_without_orientations_still_load() -> None:
     )
     assert rec.orientations == []
     assert rec.contacts[0].orientation == (0.0, 0.0)
+
+
+def test_the_4_sensor_finger_stays_vertical_unless_given_a_wrist() -> None:
+    four = builtin_finger("4")
+    assert four.wrist is None  # the paper's finger: it never feels a top (an assumed top)
+    cube = solids.box(0.06, 0.06, 0.06)
+    plain = classify(cube, finger=four, rules="parallelepipeds")
+    assert plain.model.assumed_top is not None
+    assert plain.decision.label == "rectangular_parallelepiped"
+    # with an indexing head its equator sensors face down when tilted: the top is felt
+    wrist = classify(
+        cube, finger=four.model_copy(update={"wrist": Wrist()}), rules="parallelepipeds"
+    )
+    assert wrist.model.assumed_top is None
+    assert wrist.decision.label == "cube"
+    tops = [c for c in wrist.record.contacts if c.kind == "touch" and c.direction[2] < -0.5]
+    assert tops
+    assert all(c.orientation[0] > 0 for c in tops)

@@ -5,7 +5,9 @@ tip points down, −z) and fires when the direction of a contact from the tip ce
 inside its acceptance cone. Two built-in layouts follow the paper's prototypes:
 
 * ``"4"``: four sensors 90° apart on the equator (for objects composed of rectangular
-  parallelepipeds);
+  parallelepipeds); it has no indexing head (``wrist=None``), so it behaves as the paper's
+  finger and never feels a top. The same sensors in a layout file with a ``wrist`` index,
+  and then feel a top with the head tilted;
 * ``"33"``: 33 sensors at the cross-points of meridians and parallels: the pole, 8 on the
   parallel 60° below the equator, 12 on the parallel 30° below, and 12 on the equator, i.e.
   30° apart, so that plane surfaces 30° apart are told apart. Their cones (25°) cover the
@@ -310,6 +312,9 @@ def _layout_4() -> Finger:
         directions=tuple(_ring(0.0, 4)),
         cone_deg=46.0,
         align_deg=current().finger.align_4_deg,
+        # the paper's 4-sensor finger stays vertical (it never feels a top, and its answers
+        # say so: an assumed top); a layout file with these sensors and a ``wrist`` indexes
+        wrist=None,
     )
 
 
