@@ -206,7 +206,46 @@ def completion_probes(model: ObjectModel, *, height_gap: float | None = None) ->
     # a face left out as concave but touched at one height: its quantised normal may be what
     # made it look concave (an overhanging side read as vertical)
     probes += _one_height_probes(model, centres, rho, gap, concave=True)
+    probes += _low_side_probes(model, centres, rho)
     return probes
+
+
+def _low_side_probes(model: ObjectModel, centres: FloatArray, rho: float) -> list[Probe]:
+    """Probes from above at the top edge of each side face touched only in its lower half.
+
+    The layers end when the contact is lost after a z increment (a step up the object, as
+    from an L-block's foot to its leg); the model then extends the foot's end face up to the
+    top. A touch from above, 2 ρ inside the face's top edge, meets the top there (a box) or a
+    lower step (the foot's top: a concave face).
+    """
+    poly = model.polyhedron
+    assert poly is not None
+    out = []
+    for k, verts in enumerate(poly.faces):
+        index = model.face_of[k] if k < len(model.face_of) else -1
+        if index < 0:
+            continue
+        face = model.faces[index]
+        n = np.asarray(face.normal, dtype=float)
+        if face.source != "contacts" or abs(n[2]) > 0.3 or not face.contacts:
+            continue
+        ring = poly.vertices[list(verts)]
+        z0, z1 = float(ring[:, 2].min()), float(ring[:, 2].max())
+        touched = float(centres[list(face.contacts), 2].max())
+        if z1 - z0 < 4.0 * rho or touched - z0 > 0.5 * (z1 - z0):
+            continue
+        edge = ring[ring[:, 2] >= z1 - 0.25 * rho]
+        inwards = -np.array([n[0], n[1], 0.0]) / max(float(np.linalg.norm(n[:2])), 1e-9)
+        point = edge.mean(axis=0) + 2.0 * rho * inwards
+        out.append(
+            Probe(
+                (float(point[0]), float(point[1]), z1 + rho),
+                (0.0, 0.0, 1.0),
+                z1 - z0,
+                f"the face facing {_name(n)} touched only low: its top probed from above",
+            )
+        )
+    return out
 
 
 def _one_height_probes(

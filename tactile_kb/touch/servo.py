@@ -55,7 +55,7 @@ import itertools
 import math
 from collections.abc import Iterator, Sequence
 from dataclasses import asdict, dataclass, field, replace
-from typing import Literal, Protocol
+from typing import Literal, Protocol, overload
 
 import numpy as np
 
@@ -522,6 +522,15 @@ class Controller:
                         self._note(f"stopped after {self.params.max_layers} layers")
                     break
                 nxt = self._z_increment(pos, follow, _centre(layer_contacts))
+                if nxt is None and z + self.z_step < top - self.rho:
+                    # the contact was lost below the top of the visual estimate (a step up the
+                    # object, as from an L-block's foot to its leg): a new first contact there
+                    nxt = self._first_contact([z + self.z_step], quiet=True)
+                    if nxt is not None:
+                        self._note(
+                            f"contact lost after the z increment to {z + self.z_step:.4f} m "
+                            "below the top of the visual estimate: found again by a new approach"
+                        )
                 if nxt is None:
                     break
                 pos, follow = nxt
@@ -757,7 +766,19 @@ class Controller:
             return m
         return self._move_on(here, _Z, safe - float(here[2]))
 
-    def _first_contact(self) -> tuple[FloatArray, _Follow]:
+    @overload
+    def _first_contact(
+        self, heights: list[float] | None = None, *, quiet: Literal[False] = False
+    ) -> tuple[FloatArray, _Follow]: ...
+
+    @overload
+    def _first_contact(
+        self, heights: list[float] | None = None, *, quiet: Literal[True]
+    ) -> tuple[FloatArray, _Follow] | None: ...
+
+    def _first_contact(
+        self, heights: list[float] | None = None, *, quiet: bool = False
+    ) -> tuple[FloatArray, _Follow] | None:
         """Approach the object horizontally (+x) on lines across the hint until a sensor closes.
 
         When every approach along +x met the object only where no sensor faces (a side leaning
@@ -766,9 +787,10 @@ class Controller:
         hint = self.world.hint
         gap = self.rho + self.params.approach_margin
         lo, hi = np.asarray(hint.lo, dtype=float), np.asarray(hint.hi, dtype=float)
-        heights = [self.z_first]
-        while heights[-1] + self.z_step < float(hint.hi[2]):
-            heights.append(heights[-1] + self.z_step)
+        if heights is None:
+            heights = [self.z_first]
+            while heights[-1] + self.z_step < float(hint.hi[2]):
+                heights.append(heights[-1] + self.z_step)
         tried = []
         for axis, sign in ((0, 1.0), (0, -1.0), (1, 1.0), (1, -1.0)):
             across = 1 - axis
@@ -796,6 +818,8 @@ class Controller:
                         self._note(f"blind contact (no sensor fired) at {_fmt(m.end)}")
             if not blind:
                 break  # nothing there at all: no other side will find it
+        if quiet:
+            return None
         raise ExplorationError(
             f"the finger never touched the object ({len(heights) * 5} approaches along "
             f"{', '.join(tried)} at heights {', '.join(f'{h:.3f}' for h in heights)} m)"
