@@ -247,7 +247,7 @@ class Finger(BaseModel):
         Examples
         --------
         >>> builtin_finger("33").index_towards((-1.0, 0.2, 0.0))
-        Orientation(tilt_deg=90.0, turn_deg=165.0)
+        Orientation(tilt_deg=90.0, turn_deg=345.0)
         """
         if self.wrist is None:
             return VERTICAL
