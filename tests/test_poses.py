@@ -211,3 +211,17 @@ def test_an_oblique_parallelepiped_in_every_stable_pose() -> None:
         for n in truth:
             assert float(np.max(poly.normals @ n)) >= math.cos(math.radians(3.0)), (k, n)
     assert leaning >= 2  # poses with a side leaning over the finger were among them
+
+
+def test_a_frustum_on_its_small_end_is_met_with_the_head_indexed() -> None:
+    # ground truth: upside down, every side of the frustum leans over the vertical finger
+    m = solids.rest_on_face(solids.frustum(4, 0.0895, 0.041, 0.081), (0.0, 0.0, 1.0))
+    sides = np.unique(np.round(m.face_normals, 6), axis=0)
+    assert sum(1 for n in sides if -0.9 < n[2] < -0.2) == 4
+    r = classify(m, rules="polyhedra")
+    first = r.record.contacts[0]
+    assert first.kind == "touch"
+    assert first.orientation[0] > 0  # the vertical finger met every side blind
+    assert r.record.blind
+    assert r.decision.label == "frustum"
+    assert r.record.ending == "closed", r.record.unreachable

@@ -792,7 +792,12 @@ class Controller:
             while heights[-1] + self.z_step < float(hint.hi[2]):
                 heights.append(heights[-1] + self.z_step)
         tried = []
-        for axis, sign in ((0, 1.0), (0, -1.0), (1, 1.0), (1, -1.0)):
+        sides = [(axis, sign, False) for axis, sign in ((0, 1.0), (0, -1.0), (1, 1.0), (1, -1.0))]
+        if isinstance(self.world, OrientableWorld) and self.finger.wrist is not None:
+            # every side leaning over the finger (a frustum on its small end): the head indexed
+            # towards the approach and up
+            sides += [(axis, sign, True) for axis, sign, _ in sides]
+        for axis, sign, tilted in sides:
             across = 1 - axis
             x0 = float(lo[axis]) - gap if sign > 0 else float(hi[axis]) + gap
             length = float(hi[axis] - lo[axis]) + 2 * gap
@@ -800,7 +805,7 @@ class Controller:
             ys = [yc + k * qy for k in (0.1, 1.1, -0.9, 2.1, -1.9)]
             direction = np.zeros(3)
             direction[axis] = sign
-            tried.append(f"{'+' if sign > 0 else '-'}{'xy'[axis]}")
+            tried.append(f"{'+' if sign > 0 else '-'}{'xy'[axis]}" + (" tilted" if tilted else ""))
             blind = False
             for z in heights:
                 for y in ys:
@@ -808,6 +813,10 @@ class Controller:
                     start[axis], start[across], start[2] = x0, y, z
                     if not self.world.workspace.contains(_v3(start)):
                         continue
+                    if tilted:
+                        pose = self.finger.index_towards(_v3(_unit(direction + _Z)))
+                        if not self._index(pose, start, "first contact"):
+                            continue
                     m = self._move(_v3(start), _v3(direction), length)
                     if m.event == "touch":
                         f = self._follow(m.closed)
