@@ -41,6 +41,7 @@ import numpy as np
 from tactile_kb.errors import TactileKBError, UsageError
 from tactile_kb.geometry.model import ObjectModel, build_model
 from tactile_kb.geometry.planes import Face
+from tactile_kb.geometry.polyhedron import Polyhedron
 from tactile_kb.record import ExplorationRecord
 from tactile_kb.settings import DEFAULTS, current
 from tactile_kb.touch.explorers import Explorer, WorldExplorer
@@ -70,9 +71,12 @@ class CompletionParams:
     Attributes
     ----------
     touches
-        At most this many touches spent by the completion.
+        At most this many touches spent by the completion (or two per face of the model, when
+        that is more; the path budget grows in proportion).
     path
-        At most this much tip-centre path (metres) spent by the completion.
+        At most this much tip-centre path (metres) spent by the completion, or three times the
+        touched extent per touch of the budget when that is more (each probe goes round the
+        object).
     attempts
         Probes for one open item (a direction, a face) before it counts as unreachable (when
         they found nothing, or what they found did not close it).
@@ -120,13 +124,13 @@ def completion_probes(model: ObjectModel, *, height_gap: float | None = None) ->
     rho = record.tip_radius
     gap = height_gap if height_gap is not None else 0.5 * rho
     centres = np.asarray([c.centre for c in record.contacts], dtype=float).reshape(-1, 3)
+    probes: list[Probe] = _blind_probes(model)
     if len(centres) == 0:
-        return []
+        return probes
     lo, hi = centres.min(axis=0), centres.max(axis=0)
     mid = 0.5 * (lo + hi)
     reach = float(np.linalg.norm(hi - lo)) + 4.0 * rho
     z_mid = max(float(mid[2]), rho + 0.001)
-    probes: list[Probe] = []
     if model.polyhedron is None:
         directions = [np.asarray(d, dtype=float) for d in model.open_directions]
         if not directions:  # contradictory planes: probe every side nothing faces yet
@@ -139,8 +143,8 @@ def completion_probes(model: ObjectModel, *, height_gap: float | None = None) ->
             directions = [d for d in candidates if not (normals @ d >= cos).any()]
         for d in directions:
             d = d / float(np.linalg.norm(d))
-            if d[2] < -0.5:
-                continue  # under the object: the table
+            if d[2] < -0.95:
+                continue  # straight under the object: the table
             if d[2] > 0.9:
                 target = np.array([mid[0], mid[1], hi[2]])
                 probes.append(
@@ -151,9 +155,12 @@ def completion_probes(model: ObjectModel, *, height_gap: float | None = None) ->
                 probes.append(
                     Probe(_v(target), _v(d), reach, f"open towards {_name(d)}", middle=True)
                 )
+        probes += _one_height_probes(model, centres, rho, gap)
         unique = {p.reason: p for p in reversed(probes)}  # the first of each direction
         return [p for p in probes if unique[p.reason] is p]
     poly = model.polyhedron
+    probes += _bottom_probes(model, centres, rho, gap)
+    top_touched = max(float(c.point[2]) for c in record.contacts)
     for k, verts in enumerate(poly.faces):
         index = model.face_of[k] if k < len(model.face_of) else -1
         if index < 0:
@@ -163,8 +170,8 @@ def completion_probes(model: ObjectModel, *, height_gap: float | None = None) ->
         if face.source == "contacts" and n[2] >= current().explore.top_nz:
             probes += _top_probes(face, poly.vertices[list(verts)], centres, rho)
             continue
-        if face.source != "contacts" or abs(n[2]) > 0.9 or n[2] < -0.5:
-            continue  # tops, the table, undersides: not probed at another height
+        if face.source != "contacts" or abs(n[2]) > 0.9:
+            continue  # tops and the table: not probed at another height
         zs = centres[list(face.contacts), 2] if face.contacts else np.zeros(0)
         if len(zs) and float(zs.max() - zs.min()) >= gap:
             continue
@@ -176,7 +183,9 @@ def completion_probes(model: ObjectModel, *, height_gap: float | None = None) ->
         # the surface heights the tip can touch on this face, clear of its edges (the tip
         # centre stays 1.5 ρ above the table: scanned bottom edges bulge)
         lo_z = max(z0 + margin, 1.5 * rho - rho * n[2])
-        hi_z = z1 - margin
+        # no higher than the highest point touched: a side's outline above it comes from a
+        # top not known yet (one touched along a line only tilts with its ridge)
+        hi_z = min(z1 - margin, top_touched)
         if hi_z <= lo_z:
             continue
         have = float(zs.mean()) - rho * n[2] if len(zs) else 0.5 * (lo_z + hi_z)
@@ -194,7 +203,235 @@ def completion_probes(model: ObjectModel, *, height_gap: float | None = None) ->
                 f"the face facing {_name(n)} touched at one height",
             )
         )
+    # a face left out as concave but touched at one height: its quantised normal may be what
+    # made it look concave (an overhanging side read as vertical)
+    probes += _one_height_probes(model, centres, rho, gap, concave=True)
+    probes += _low_side_probes(model, centres, rho)
     return probes
+
+
+def _low_side_probes(model: ObjectModel, centres: FloatArray, rho: float) -> list[Probe]:
+    """Probes from above at the top edge of each side face touched only in its lower half.
+
+    The layers end when the contact is lost after a z increment (a step up the object, as
+    from an L-block's foot to its leg); the model then extends the foot's end face up to the
+    top. A touch from above, 2 ρ inside the face's top edge, meets the top there (a box) or a
+    lower step (the foot's top: a concave face).
+    """
+    poly = model.polyhedron
+    assert poly is not None
+    out = []
+    for k, verts in enumerate(poly.faces):
+        index = model.face_of[k] if k < len(model.face_of) else -1
+        if index < 0:
+            continue
+        face = model.faces[index]
+        n = np.asarray(face.normal, dtype=float)
+        if face.source != "contacts" or abs(n[2]) > 0.3 or not face.contacts:
+            continue
+        ring = poly.vertices[list(verts)]
+        z0, z1 = float(ring[:, 2].min()), float(ring[:, 2].max())
+        touched = float(centres[list(face.contacts), 2].max())
+        if z1 - z0 < 4.0 * rho or touched - z0 > 0.5 * (z1 - z0):
+            continue
+        edge = ring[ring[:, 2] >= z1 - 0.25 * rho]
+        inwards = -np.array([n[0], n[1], 0.0]) / max(float(np.linalg.norm(n[:2])), 1e-9)
+        point = edge.mean(axis=0) + 2.0 * rho * inwards
+        out.append(
+            Probe(
+                (float(point[0]), float(point[1]), z1 + rho),
+                (0.0, 0.0, 1.0),
+                z1 - z0,
+                f"the face facing {_name(n)} touched only low: its top probed from above",
+            )
+        )
+    return out
+
+
+def _one_height_probes(
+    model: ObjectModel, centres: FloatArray, rho: float, gap: float, *, concave: bool = False
+) -> list[Probe]:
+    """For an open model (or, with ``concave``, for the faces a closed one left out as
+    concave): a probe at another height for each side face whose tip centres lie at one
+    height.
+
+    Such a face's normal is the sensor's, quantised (an overhanging side felt by the
+    vertical finger's equator reads as vertical), so the planes may close far from the object
+    or not at all; a second height fits its slope. The other height is 2 ρ (or a quarter of
+    the touched height) below the face's contacts, or above them when that is too near the
+    table, never above the highest point touched.
+    """
+    top = max(float(c.point[2]) for c in model.record.contacts)
+    delta = max(2.0 * rho, 0.25 * top)
+    out = []
+    for k, face in enumerate(model.faces):
+        n = np.asarray(face.normal, dtype=float)
+        if face.source != "contacts" or abs(n[2]) > 0.9 or not face.contacts:
+            continue
+        if concave and (k >= len(model.supporting) or model.supporting[k]):
+            continue
+        pts = centres[list(face.contacts)]
+        if float(np.ptp(pts[:, 2])) >= gap:
+            continue
+        z0 = float(pts[:, 2].mean())
+        lowest = 1.5 * rho
+        z = z0 - delta if z0 - delta >= lowest else z0 + delta
+        if z > top or z < lowest:
+            continue
+        target = pts.mean(axis=0)
+        target[2] = z
+        out.append(
+            Probe(
+                _v(target),
+                _v(n),
+                4.0 * rho + delta,
+                f"the face facing {_name(n)} touched at one height",
+            )
+        )
+    return out
+
+
+def _distance_to(poly: Polyhedron, point: FloatArray) -> float:
+    """Distance (m) from ``point`` to the convex polyhedron ``poly`` (negative inside: minus
+    the distance to the nearest face's plane)."""
+    s = poly.normals @ point - poly.offsets
+    if float(s.max()) <= 0.0:
+        return float(s.max())
+    best = math.inf
+    for k, verts in enumerate(poly.faces):
+        if s[k] <= 0.0:
+            continue  # a face turned away from the point is never the nearest
+        ring = poly.vertices[list(verts)]
+        n = poly.normals[k]
+        foot = point - s[k] * n
+        edges = np.roll(ring, -1, axis=0) - ring
+        if (
+            np.einsum("ij,ij->i", np.cross(edges, foot - ring), np.broadcast_to(n, ring.shape)) >= 0
+        ).all():
+            best = min(best, float(s[k]))
+            continue
+        t = np.clip(np.einsum("ij,ij->i", point - ring, edges) / (edges * edges).sum(axis=1), 0, 1)
+        closest = ring + t[:, None] * edges
+        best = min(best, float(np.linalg.norm(closest - point, axis=1).min()))
+    return best
+
+
+def _blind_probes(model: ObjectModel) -> list[Probe]:
+    """Probes at the blind contacts the model does not explain, the head indexed so that the
+    tip points along the blocked motion and up.
+
+    A motion blocked with no sensor closed met the object where no sensor faces: an overhang
+    above the tip (a lying prism's lower side, a pyramid on a lateral face). The model explains
+    it when its surface lies one tip radius from the tip centre there; otherwise the probe
+    approaches the same point along the same direction, the head indexed towards the motion
+    tilted upwards (:meth:`~tactile_kb.touch.finger.Finger.index_towards`), so that a sensor
+    faces what blocked it. Blind contacts closer than 2 ρ to one already listed give no probe.
+    """
+    record = model.record
+    if not record.blind:
+        return []
+    rho = record.tip_radius
+    tol = 0.25 * rho + 3.0 * record.noise
+    poly = model.polyhedron
+    faces = [f for f in model.faces if f.source == "contacts"]
+    out: list[Probe] = []
+    listed: list[FloatArray] = []
+    for point, direction in record.blind:
+        c = np.asarray(point, dtype=float)
+        d = np.asarray(direction, dtype=float)
+        h = np.array([d[0], d[1], 0.0])
+        if float(np.linalg.norm(h)) < 0.5:
+            continue  # blocked going up or down: no horizontal approach reaches it
+        h /= float(np.linalg.norm(h))
+        if any(float(np.linalg.norm(c - q)) < 2.0 * rho for q in listed):
+            continue
+        if poly is not None:
+            explained = abs(_distance_to(poly, c) - rho) <= tol
+        else:
+            explained = any(
+                abs(float(f.normal_array @ c) - f.offset - rho) <= tol
+                and float(f.normal_array @ h) < -0.1
+                for f in faces
+            )
+        if explained:
+            continue
+        listed.append(c)
+        out.append(
+            Probe(
+                _v(c),
+                _v(-h),
+                4.0 * rho,
+                f"a blind contact at {_name(c * 1000.0)} mm",
+                facing=_v((h + np.array([0.0, 0.0, 1.0])) / math.sqrt(2.0)),
+            )
+        )
+    return out
+
+
+def _bottom_probes(model: ObjectModel, centres: FloatArray, rho: float, gap: float) -> list[Probe]:
+    """Probes near the table of the sloping faces the model extends down to the table.
+
+    The model closes the envelope with the table, as if the object rested on a face there.
+    A face that is not vertical and meets the table in the model was touched higher up only;
+    the object may turn under it (a prism lying on a side, an icosahedron on a vertex): one
+    probe at the lowest height the tip reaches on it, approached along its normal (the head
+    indexed when the face overhangs). A touch there confirms it; a touch elsewhere is a face
+    not seen yet and reshapes the model. Asked only when the exploration met the object blind
+    (``record.blind``, a contact no sensor felt): the sign of a surface turning under.
+    """
+    poly = model.polyhedron
+    record = model.record
+    if poly is None or not record.blind:
+        return []  # nothing met the finger where no sensor faced: no sign of an undercut
+    table = [
+        k
+        for k in range(len(poly.faces))
+        if k < len(model.face_of)
+        and model.face_of[k] >= 0
+        and model.faces[model.face_of[k]].source == "table"
+    ]
+    if not table:
+        return []
+    beside = {b for a, b in poly.edge_faces if a in table} | {
+        a for a, b in poly.edge_faces if b in table
+    }
+    points = np.asarray([c.point for c in record.contacts], dtype=float).reshape(-1, 3)
+    out = []
+    for k in sorted(beside - set(table)):
+        index = model.face_of[k] if k < len(model.face_of) else -1
+        if index < 0:
+            continue
+        face = model.faces[index]
+        n = np.asarray(face.normal, dtype=float)
+        if face.source != "contacts" or abs(n[2]) < math.sin(math.radians(3.0)) or n[2] > 0.9:
+            continue  # vertical faces meet the table as the layers saw them; tops do not
+        if -math.sin(math.radians(20.0)) <= n[2] < 0.0:
+            continue  # felt by the vertical finger down to its lowest layer (an octahedron)
+        ring = poly.vertices[list(poly.faces[k])]
+        z0, z1 = float(ring[:, 2].min()), float(ring[:, 2].max())
+        low = max(z0 + 0.5 * rho, 1.5 * rho - rho * float(n[2]))  # the tip stays off the table
+        if low >= z1 - 0.5 * rho:
+            continue
+        touched = points[list(face.contacts), 2] if face.contacts else np.zeros(0)
+        if len(touched) and float(touched.min()) <= low + max(2.0 * rho, gap):
+            continue  # touched near the table already
+        point = _section_point(ring, low)
+        out_h = np.array([n[0], n[1], 0.0])
+        if point is None or float(np.linalg.norm(out_h)) < 1e-6:
+            continue
+        out_h /= float(np.linalg.norm(out_h))
+        # approached horizontally with the tip pointing inwards: what is there (the face, or
+        # a face turning under it) faces the tip's front hemisphere either way
+        out.append(
+            Probe(
+                _v(point + rho * n),
+                _v(out_h),
+                float(np.ptp(poly.vertices[:, 0]) + np.ptp(poly.vertices[:, 1])),
+                f"the face facing {_name(n)} not touched near the table",
+                facing=_v(-out_h),
+            )
+        )
+    return out
 
 
 def _top_probes(face: Face, ring: FloatArray, centres: FloatArray, rho: float) -> list[Probe]:
@@ -314,11 +551,19 @@ class ModelCompleter:
                 f"{what} after {record.touches} touches; unreachable: " + "; ".join(open_items),
                 tuple(open_items),
             )
-        if touches >= self.params.touches or path >= self.params.path:
+        # many-faced objects get two touches a face (an icosahedron: 40)
+        faces = sum(1 for f in model.faces if f.source == "contacts")
+        budget = max(self.params.touches, 2 * faces) if self.params.touches else 0
+        scale = budget / self.params.touches if self.params.touches else 1.0
+        # a probe goes round the object: large objects get path in proportion to their size
+        centres = np.asarray([c.centre for c in record.contacts], dtype=float).reshape(-1, 3)
+        size = float(np.linalg.norm(np.ptp(centres, axis=0))) if len(centres) else 0.0
+        allowed = max(self.params.path * scale, 3.0 * size * budget)
+        if touches >= budget or path >= allowed:
             return Ending(
                 "budget",
-                f"the completion budget ran out ({touches} of {self.params.touches} touches, "
-                f"{path:.2f} of {self.params.path:g} m of path; {record.touches} touches in "
+                f"the completion budget ran out ({touches} of {budget} touches, "
+                f"{path:.2f} of {allowed:.3g} m of path; {record.touches} touches in "
                 "all): still open: " + "; ".join(open_items),
                 tuple(open_items),
             )

@@ -94,7 +94,9 @@ class Classification:
         Its schema is ``tactile_kb/schemas/classification.schema.json``: ``answer`` is the
         bare answer and ``report`` the answer with the measures its class reports (as the
         text output prints it); ``touches`` counts sensor OFF→ON events and ``contacts``
-        every contact recorded (touches and slides).
+        every contact recorded (touches and slides); ``ending`` is how the completion ended
+        and ``unreachable`` names what it could not touch (a face flat on the table, one the
+        object shadows), never guessed.
         """
         return {
             "object": self.object,
@@ -114,6 +116,8 @@ class Classification:
             "reported": self.reported,
             "measures": self.measures,
             "notes": list(self.record.notes),
+            "ending": self.record.ending,
+            "unreachable": list(self.record.unreachable),
         }
 
 

@@ -49,6 +49,7 @@ from tactile_kb.geometry.model import ObjectModel, build_model
 from tactile_kb.grasp.planner import GraspPlan
 from tactile_kb.kb.tree import TreeNode, choice_tree
 from tactile_kb.record import ExplorationRecord
+from tactile_kb.touch.finger import Orientation
 
 if TYPE_CHECKING:
     import trimesh
@@ -84,6 +85,7 @@ _MAX_FACE_ENTRIES = 10  # faces beyond these share one legend entry
 _HIGHLIGHT = "#e66100"
 _MODEL = "#1f5fbf"
 _GRASP = "#c01c28"
+_TILTED = "#e66100"  # the shaft at a touch made with the head indexed away from the vertical
 
 
 def _figure(size: tuple[float, float], dpi: float) -> Figure:
@@ -148,6 +150,7 @@ def _draw_3d(
         pts = np.asarray([c.point for c in record.contacts], dtype=float)
         _draw_contacts(ax, pts, model)
         extent.append(pts)
+        _draw_shafts(ax, record)
     poly = model.polyhedron if model is not None else None
     solid = grasp.solid if grasp is not None else None
     if poly is not None:
@@ -208,6 +211,41 @@ def _draw_3d(
         getattr(ax, f"set_{axis}label")(f"{axis} (mm)", fontsize=_FONT, labelpad=6)
     _millimetres(ax)
     ax.tick_params(labelsize=_TICK_FONT, pad=1)
+
+
+def _draw_shafts(ax: Any, record: ExplorationRecord) -> None:
+    """At every touch, a short segment from the tip centre along the finger's shaft: the
+    head's pose there: black where the finger hung vertically, orange (and thicker) where the
+    head was indexed away from the vertical to reach an overhang or an underside.
+    Only records whose head ever left the vertical draw them (the paper's finger hangs
+    vertically all along)."""
+    touches = [c for c in record.contacts if c.kind == "touch"]
+    if not any(c.orientation != (0.0, 0.0) for c in touches):
+        return
+    pts = np.asarray([c.centre for c in record.contacts], dtype=float)
+    length = max(4.0 * record.tip_radius, 0.2 * float(np.linalg.norm(np.ptp(pts, axis=0))))
+    groups: dict[bool, list[np.ndarray[Any, np.dtype[np.float64]]]] = {False: [], True: []}
+    for c in touches:
+        tilt, turn = c.orientation
+        axis = np.asarray(Orientation(tilt, turn).axis, dtype=float)
+        centre = np.asarray(c.centre, dtype=float)
+        groups[abs(tilt) > 1e-9].append(np.vstack([centre, centre + length * axis]))
+    if groups[False]:
+        ax.add_collection3d(Line3DCollection(groups[False], colors="k", linewidths=1.4))
+        ax.plot(
+            [], [], [], color="k", lw=1.4, label="finger's shaft at a touch:\nhanging vertically"
+        )
+    if groups[True]:
+        ax.add_collection3d(Line3DCollection(groups[True], colors=_TILTED, linewidths=2.0))
+        ax.plot(
+            [],
+            [],
+            [],
+            color=_TILTED,
+            lw=2.0,
+            label="finger's shaft at a touch: head indexed,\n"
+            f"tilted from the vertical ({len(groups[True])} touches)",
+        )
 
 
 def _millimetres(ax: Any) -> None:

@@ -78,6 +78,11 @@ class Contact(BaseModel):
     kind: Literal["touch", "slide"] = "touch"
     phase: str = Field(default="", description="exploration phase (first-contact, layer, top, …)")
     layer: int | None = Field(default=None, description="index of the z-layer, if any")
+    orientation: Vec2 = Field(
+        default=(0.0, 0.0),
+        description="the head's pose (tilt, turn), degrees, when the contact was recorded; "
+        "(0, 0): the finger hanging vertically; direction is in the world frame either way",
+    )
 
     @property
     def normal(self) -> Vec3:
@@ -139,6 +144,16 @@ class ExplorationRecord(BaseModel):
     )
     unreachable: list[str] = Field(
         default_factory=list, description="what stayed open when the completion ended"
+    )
+    orientations: list[tuple[int, float, float]] = Field(
+        default_factory=list,
+        description="(path index, tilt, turn): the head was indexed to (tilt, turn) degrees at "
+        "path[index] and kept that pose until the next entry; empty: vertical all along",
+    )
+    blind: list[tuple[Vec3, Vec3]] = Field(
+        default_factory=list,
+        description="blind contacts: (tip centre, direction of the motion) where a motion was "
+        "blocked with no sensor closed (the object met where no sensor faces: an overhang)",
     )
 
     @model_validator(mode="before")

@@ -226,3 +226,25 @@ def test_compile_refuses_what_validate_refuses(
     assert [line for line in validate_err.splitlines() if needle in line] == [
         line for line in compile_err.splitlines() if needle in line
     ]
+
+
+def test_what_stayed_unreachable_is_named_in_the_json(
+    files: dict[str, Path], tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    # the 4-sensor finger has no sensor that can face a top in any pose of its head: the cube's
+    # top stays open, and both the JSON line and the saved record name it rather than guess it
+    assert main(["classify", str(files["cube"]), "--finger", "4", "--json"]) == 0
+    row = json.loads(capsys.readouterr().out)
+    validate("classify", row)
+    assert row["ending"] == "unreachable"
+    assert row["unreachable"] == ["open towards +z"]
+    out = tmp_path / "rec.json"
+    assert main(["explore", str(files["cube"]), "--finger", "4", "--out", str(out)]) == 0
+    capsys.readouterr()
+    record = ExplorationRecord.load(out)
+    assert (record.ending, record.unreachable) == ("unreachable", ["open towards +z"])
+    # an exploration that closes its model names nothing
+    assert main(["classify", str(files["cube"]), "--json"]) == 0
+    row = json.loads(capsys.readouterr().out)
+    validate("classify", row)
+    assert (row["ending"], row["unreachable"]) == ("closed", [])

@@ -234,7 +234,8 @@ def test_an_answer_reached_with_values_left_open_is_highlighted() -> None:
     lit, and only they; a leaf of another class with compatible values stays grey."""
     kb = compile_rules("polyhedra")
     decision = kb.classify("10110111110011-")
-    assert decision.label == "cube" and decision.values["S"] is None
+    assert decision.label == "cube"
+    assert decision.values["S"] is None
     fig = plot_tree(kb, decision=decision)
     (ax,) = fig.axes
     boxes = [t for t in ax.texts if t.get_bbox_patch() is not None]
@@ -261,3 +262,37 @@ def test_classify_plot_draws_the_true_mesh(tmp_path: Path, monkeypatch: pytest.M
     (mesh,) = seen
     assert mesh is not None
     assert len(mesh.faces) == 12  # type: ignore[attr-defined]
+
+
+def test_the_shaft_at_each_touch_shows_the_heads_pose(box_record: ExplorationRecord) -> None:
+    # the paper's finger hangs vertically all along: no shafts are drawn
+    assert not any("shaft" in label for label in _figure_legend(plot_exploration(box_record)))
+    touches = [i for i, c in enumerate(box_record.contacts) if c.kind == "touch"]
+    tilted = set(touches[:3])
+    contacts = [
+        c.model_copy(update={"orientation": (90.0, 45.0)}) if i in tilted else c
+        for i, c in enumerate(box_record.contacts)
+    ]
+    record = box_record.model_copy(update={"contacts": contacts})
+    fig = plot_exploration(record)
+    labels = _figure_legend(fig)
+    assert any(
+        label.endswith(f"tilted from the vertical ({len(tilted)} touches)") for label in labels
+    )
+    assert any(
+        label.startswith("finger's shaft at a touch:\nhanging vertically") for label in labels
+    )
+    # the tilted shafts run along the head's axis: at tilt 90°, turn 45° the shaft is horizontal
+    # towards (+1, +1)/√2 (the tip points the other way)
+    ax = fig.axes[0]
+    orange = [
+        c
+        for c in ax.collections
+        if type(c).__name__ == "Line3DCollection" and to_hex(c.get_color()[0]) == "#e66100"
+    ]
+    (shafts,) = orange
+    segs = np.asarray(shafts._segments3d)
+    d = segs[:, 1] - segs[:, 0]
+    d /= np.linalg.norm(d, axis=1)[:, None]
+    assert len(segs) == len(tilted)
+    np.testing.assert_allclose(d, np.tile([0.5**0.5, 0.5**0.5, 0.0], (len(tilted), 1)), atol=1e-9)

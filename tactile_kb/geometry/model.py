@@ -224,7 +224,7 @@ def build_model(
     )
     noise = record.noise
     tol = support_tol if support_tol is not None else max(split_tol or geo.split_tol, 6.0 * noise)
-    points, normals, offsets, supporting = _support(arrays[0], record.tip_radius, faces, tol, noise)
+    points, normals, offsets, supporting = _support(arrays[0], record.tip_radius, faces, tol)
     edge_contacts: tuple[int, ...] = ()
     if edge_rounding is not None and len(faces) >= 5:
         drop = edge_faces(faces, arrays[0], record.tip_radius, noise=noise, rounding=edge_rounding)
@@ -232,7 +232,7 @@ def build_model(
             edge_contacts = tuple(sorted(i for k in drop for i in faces[k].contacts))
             faces = tuple(f for k, f in enumerate(faces) if k not in drop)
             points, normals, offsets, supporting = _support(
-                arrays[0], record.tip_radius, faces, tol, noise
+                arrays[0], record.tip_radius, faces, tol
             )
     options = {
         "cut_deg": cut_deg,
@@ -336,29 +336,21 @@ def build_model(
 
 
 def _support(
-    centres: FloatArray, rho: float, faces: tuple[Face, ...], tol: float, noise: float = 0.0
+    centres: FloatArray, rho: float, faces: tuple[Face, ...], tol: float
 ) -> tuple[FloatArray, FloatArray, FloatArray, list[bool]]:
-    """Surface points, face normals and offsets, and which faces support the object (no
-    touched point more than ``tol`` outside their plane).
-
-    Only the contacts that lie on their own face's plane (tip centre within 3 × the robust
-    fit's scale, ``max(noise, geometry.robust_rho × ρ)``, of it) give surface points for that
-    test: a contact the face's robust fit left out touched an edge or a vertex beside it,
-    not the face, and moved along the face's normal it would land outside a neighbour."""
+    """Surface points, face normals and offsets, and which faces support the object: no tip
+    that touched lies wholly beyond their plane, by more than ``tol`` (the ball touched the
+    object there, so the object reaches beyond the plane: a concave face). The tip centres
+    are used, not the surface points estimated from each contact's face: a slide past the
+    end of a face touches its edge, and the point estimated on the face's plane lies beyond
+    the neighbouring face's."""
     points = _surface_points(centres, rho, faces)
     normals = np.asarray([f.normal for f in faces], dtype=float).reshape(-1, 3)
     offsets = np.asarray([f.offset for f in faces], dtype=float)
-    if len(points):
-        scale = max(noise, current().geometry.robust_rho * rho)
-        on_face = np.concatenate(
-            [
-                np.abs(centres[list(f.contacts)] @ f.normal_array - f.offset - rho) <= 3.0 * scale
-                for f in faces
-                if f.contacts
-            ]
-        )
-        test = points[on_face] if on_face.any() else points
-        supporting = [bool(s) for s in (test @ normals.T - offsets).max(axis=0) <= tol]
+    touched = [i for f in faces for i in f.contacts]
+    if touched:
+        beyond = centres[touched] @ normals.T - offsets - rho
+        supporting = [bool(s) for s in beyond.max(axis=0) <= tol]
     else:
         supporting = [True] * len(faces)
     return points, normals, offsets, supporting

@@ -5,7 +5,9 @@ tip points down, −z) and fires when the direction of a contact from the tip ce
 inside its acceptance cone. Two built-in layouts follow the paper's prototypes:
 
 * ``"4"``: four sensors 90° apart on the equator (for objects composed of rectangular
-  parallelepipeds);
+  parallelepipeds); it has no indexing head (``wrist=None``), so it behaves as the paper's
+  finger and never feels a top. The same sensors in a layout file with a ``wrist`` index,
+  and then feel a top with the head tilted;
 * ``"33"``: 33 sensors at the cross-points of meridians and parallels: the pole, 8 on the
   parallel 60° below the equator, 12 on the parallel 30° below, and 12 on the equator, i.e.
   30° apart, so that plane surfaces 30° apart are told apart. Their cones (25°) cover the
@@ -54,8 +56,11 @@ __all__ = [
     "BUILTIN_LAYOUTS",
     "DEFAULT_TIP_RADIUS",
     "MAX_USABLE_ERROR_DEG",
+    "VERTICAL",
     "Coverage",
     "Finger",
+    "Orientation",
+    "Wrist",
     "builtin_finger",
     "coverage",
     "layout_warnings",
@@ -71,6 +76,92 @@ DEFAULT_TIP_RADIUS = 0.005
 ALIGN_4_DEG = DEFAULTS.finger.align_4_deg
 """Degrees: the 4-sensor finger is meant for surfaces facing its sensors (axis-aligned objects
 made of rectangular parallelepipeds); a surface turned further from its sensor is reported."""
+
+
+@dataclass(frozen=True)
+class Orientation:
+    """A pose of the indexing head: the finger tilted by ``tilt_deg`` about a horizontal axis,
+    then turned by ``turn_deg`` about the vertical.
+
+    At ``(0, 0)`` the finger hangs vertically (tip down, shaft up: the paper's finger). Tilting
+    by θ swings the tip's pole from −z towards −x (and the shaft from +z towards +x); the turn
+    then rotates both about +z. Sensor directions given in the finger frame are seen in the
+    world as ``rotation @ d``.
+
+    Examples
+    --------
+    >>> o = Orientation(90.0, 180.0)
+    >>> [round(c, 6) + 0.0 for c in o.pole], [round(c, 6) + 0.0 for c in o.axis]
+    ([1.0, 0.0, 0.0], [-1.0, 0.0, 0.0])
+    """
+
+    tilt_deg: float = 0.0
+    turn_deg: float = 0.0
+
+    @property
+    def vertical(self) -> bool:
+        """Whether the finger hangs vertically (no tilt)."""
+        return abs(self.tilt_deg) < 1e-9
+
+    @property
+    def rotation(self) -> NDArray[np.float64]:
+        """The 3×3 rotation from the finger frame to the world."""
+        t, a = math.radians(self.tilt_deg), math.radians(self.turn_deg)
+        ry = np.array(
+            [[math.cos(t), 0.0, math.sin(t)], [0.0, 1.0, 0.0], [-math.sin(t), 0.0, math.cos(t)]]
+        )
+        rz = np.array(
+            [[math.cos(a), -math.sin(a), 0.0], [math.sin(a), math.cos(a), 0.0], [0.0, 0.0, 1.0]]
+        )
+        out: NDArray[np.float64] = rz @ ry
+        return out
+
+    @property
+    def axis(self) -> Vec3:
+        """The shaft's direction in the world (tip centre towards the head)."""
+        r = self.rotation[:, 2]
+        return (float(r[0]), float(r[1]), float(r[2]))
+
+    @property
+    def pole(self) -> Vec3:
+        """The direction the tip points to in the world (−:attr:`axis`)."""
+        a = self.axis
+        return (-a[0], -a[1], -a[2])
+
+
+VERTICAL = Orientation()
+"""The paper's finger: hanging vertically, tip down."""
+
+
+class Wrist(BaseModel):
+    """The indexing head: tilts of 0…``max_tilt_deg`` and turns of 0…360°, both in steps of
+    ``step_deg`` (a divisor of 90°, so that the vertical, the horizontal and the four axis
+    headings are poses)."""
+
+    model_config = ConfigDict(frozen=True, extra="forbid", allow_inf_nan=False)
+
+    step_deg: float = Field(default=15.0, gt=0.0, le=90.0, description="index step, degrees")
+    max_tilt_deg: float = Field(
+        default=90.0, ge=0.0, le=180.0, description="the largest tilt, degrees"
+    )
+
+    @field_validator("step_deg")
+    @classmethod
+    def _divides_90(cls, v: float) -> float:
+        k = 90.0 / v
+        if abs(k - round(k)) > 1e-9:
+            raise ValueError(f"the index step must divide 90°, got {v:g}° (e.g. 7.5, 15, 30)")
+        return v
+
+    def poses(self) -> list[Orientation]:
+        """Every indexed pose, the vertical first, then by increasing tilt."""
+        out = [VERTICAL]
+        tilts = math.floor(self.max_tilt_deg / self.step_deg + 1e-9)
+        turns = round(360.0 / self.step_deg)
+        for i in range(1, tilts + 1):
+            for j in range(turns):
+                out.append(Orientation(i * self.step_deg, j * self.step_deg))
+        return out
 
 
 class Finger(BaseModel):
@@ -95,6 +186,16 @@ class Finger(BaseModel):
         description="the largest angle between a felt surface's normal and its sensor that the "
         "layout is meant for (None: any within the cone)",
     )
+    wrist: Wrist | None = Field(
+        default_factory=Wrist, description="the indexing head (None: the finger stays vertical)"
+    )
+    shaft_radius: float | None = Field(
+        default=None,
+        gt=0.0,
+        description="radius of the shaft (stem) above the tip, metres; it collides with the "
+        "object (None: the shaft is not modelled)",
+    )
+    shaft_length: float = Field(default=0.25, gt=0.0, description="shaft length, metres")
 
     @field_validator("directions")
     @classmethod
@@ -132,6 +233,69 @@ class Finger(BaseModel):
         i = int(np.argmax(cos))
         return i if cos[i] >= self.cos_cone - 1e-12 else None
 
+    def directions_at(self, orientation: Orientation) -> NDArray[np.float64]:
+        """The sensor directions in the world with the head at ``orientation``, (n, 3)."""
+        if orientation.vertical and abs(orientation.turn_deg) < 1e-12:
+            return self.matrix
+        out: NDArray[np.float64] = self.matrix @ orientation.rotation.T
+        return out
+
+    def index_towards(self, direction: Sequence[float]) -> Orientation:
+        """The indexed pose whose tip points nearest to ``direction`` (the vertical without a
+        wrist).
+
+        Examples
+        --------
+        >>> builtin_finger("33").index_towards((-1.0, 0.2, 0.0))
+        Orientation(tilt_deg=90.0, turn_deg=345.0)
+        """
+        if self.wrist is None:
+            return VERTICAL
+        d = np.asarray(direction, dtype=float)
+        poses = self.wrist.poses()
+        poles = np.asarray([p.pole for p in poses])
+        return poses[int(np.argmax(poles @ d))]
+
+    def index_for(self, normal: Sequence[float]) -> Orientation | None:
+        """The head pose for touching a surface whose outward normal is ``normal``.
+
+        The vertical finger when a sensor faces the surface (its contact direction −n lies in a
+        cone) and, with a shaft, the shaft leans away from the surface (n_z ≥ 0): the paper's
+        finger. Otherwise the indexed pose (:meth:`Wrist.poses`) in which a sensor faces the
+        surface and the shaft leans furthest away from it (the least tilt among equals);
+        ``None`` when no pose has a sensor facing it.
+
+        Examples
+        --------
+        >>> f = builtin_finger("33")
+        >>> f.index_for((1.0, 0.0, 0.0))
+        Orientation(tilt_deg=0.0, turn_deg=0.0)
+        >>> f.index_for((0.0, 0.0, -1.0))  # an underside: the tip points up as far as it can
+        Orientation(tilt_deg=90.0, turn_deg=0.0)
+        """
+        n = np.asarray(normal, dtype=float)
+        n = n / float(np.linalg.norm(n))
+        sees = self.nearest(_v(-n)) is not None
+        overhang = float(n[2]) < -math.sin(math.radians(self.cone_deg * 0.5))
+        if sees and not (overhang and self.wrist is not None):
+            return VERTICAL
+        if self.wrist is None:
+            return None
+        best: tuple[float, Orientation] | None = None
+        for pose in self.wrist.poses():
+            d = self.directions_at(pose)
+            cos = d @ -n
+            if float(cos.max()) < self.cos_cone + 0.05:  # a sensor must face it, with a margin
+                continue
+            score = float(np.asarray(pose.axis) @ n) - 1e-3 * pose.tilt_deg / 90.0
+            if best is None or score > best[0] + 1e-12:
+                best = (score, pose)
+        return best[1] if best else None
+
+
+def _v(a: NDArray[np.float64]) -> Vec3:
+    return (float(a[0]), float(a[1]), float(a[2]))
+
 
 def _ring(elevation_deg: float, count: int, phase_deg: float = 0.0) -> list[Vec3]:
     e = math.radians(elevation_deg)
@@ -148,6 +312,9 @@ def _layout_4() -> Finger:
         directions=tuple(_ring(0.0, 4)),
         cone_deg=46.0,
         align_deg=current().finger.align_4_deg,
+        # the paper's 4-sensor finger stays vertical (it never feels a top, and its answers
+        # say so: an assumed top); a layout file with these sensors and a ``wrist`` indexes
+        wrist=None,
     )
 
 
@@ -195,6 +362,9 @@ class _LayoutFile(BaseModel):
     align_deg: float | None = Field(default=None, gt=0.0, lt=90.0)
     sensors: list[Any] = Field(default_factory=list)  # each entry checked by _sensor()
     rings: list[_Ring] = Field(default_factory=list)
+    wrist: Wrist | None = Field(default_factory=Wrist)
+    shaft_radius: float | None = Field(default=None, gt=0.0, le=0.1)
+    shaft_length: float = Field(default=0.25, gt=0.0, le=2.0)
 
 
 _SENSOR_FORM = "a sensor is [x, y, z] or {elevation: degrees, azimuth: degrees}"
@@ -265,7 +435,11 @@ def load_layout(source: str | Path, *, file: str | None = None) -> Finger:
     ``description``, and the sensors: ``sensors``, a
     list of unit vectors ``[x, y, z]`` (tip centre outwards; normalised on load) or
     ``{elevation, azimuth}`` in degrees, and/or ``rings``, each ``{elevation, count, phase}``
-    (``count`` sensors evenly spaced in azimuth starting at ``phase``). Every problem of the
+    (``count`` sensors evenly spaced in azimuth starting at ``phase``). Sensors may lie on the
+    upper hemisphere too (a ball stylus on a stem). Optionally ``wrist`` (the indexing head,
+    :class:`Wrist`: ``{step_deg: 15, max_tilt_deg: 90}``, or ``null`` for a finger that stays
+    vertical; the step must divide 90°), ``shaft_radius`` and ``shaft_length`` (metres: the
+    shaft or stem above the tip, which collides with the object). Every problem of the
     file (duplicate keys, wrong fields, bad sensor entries, repeated directions) is reported
     at once with its ``file:line:column`` in one :class:`~tactile_kb.errors.LayoutFileError`.
 
@@ -327,6 +501,9 @@ def load_layout(source: str | Path, *, file: str | None = None) -> Finger:
         directions=tuple(dirs),
         cone_deg=spec.cone_deg,
         align_deg=spec.align_deg,
+        wrist=spec.wrist,
+        shaft_radius=spec.shaft_radius,
+        shaft_length=spec.shaft_length,
     )
 
 

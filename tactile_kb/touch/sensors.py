@@ -33,13 +33,14 @@ Examples
 
 from __future__ import annotations
 
+import copy
 import math
 
 import numpy as np
 
-from tactile_kb.errors import UsageError
-from tactile_kb.touch.finger import Finger
-from tactile_kb.touch.world import Box, Motion, Vec3, Workspace, World
+from tactile_kb.errors import ExplorationError, UsageError
+from tactile_kb.touch.finger import VERTICAL, Finger, Orientation
+from tactile_kb.touch.world import Box, Motion, OrientableWorld, Vec3, Workspace, World
 
 __all__ = ["FaultySensors", "check_fault_rates"]
 
@@ -85,6 +86,24 @@ class FaultySensors:
         self.dropout = float(dropout)
         self.false_fire = float(false_fire)
         self._rng = np.random.default_rng(seed)
+
+    @property
+    def orientation(self) -> Orientation:
+        """The head's pose in the wrapped world (vertical when it cannot index)."""
+        inner = getattr(self.world, "orientation", VERTICAL)
+        return inner if isinstance(inner, Orientation) else VERTICAL
+
+    def oriented(self, orientation: Orientation, at: Vec3 | None = None) -> FaultySensors:
+        """The wrapped world with the head indexed to ``orientation`` (see
+        :class:`~tactile_kb.touch.world.OrientableWorld`), read through the same faulty sensors
+        (one random generator for both)."""
+        if not isinstance(self.world, OrientableWorld):
+            raise ExplorationError(
+                f"the world {type(self.world).__name__} cannot index the finger's head"
+            )
+        out = copy.copy(self)
+        out.world = self.world.oriented(orientation, at)
+        return out
 
     @property
     def finger(self) -> Finger:

@@ -55,15 +55,16 @@ import itertools
 import math
 from collections.abc import Iterator, Sequence
 from dataclasses import asdict, dataclass, field, replace
-from typing import Literal, Protocol
+from typing import Literal, Protocol, overload
 
 import numpy as np
 
 from tactile_kb.errors import ExplorationError, UsageError
 from tactile_kb.record import Contact, ExplorationRecord, Layer
 from tactile_kb.settings import DEFAULTS, current
+from tactile_kb.touch.finger import VERTICAL, Orientation
 from tactile_kb.touch.watch import current_watcher
-from tactile_kb.touch.world import Motion, Vec3, World
+from tactile_kb.touch.world import Motion, OrientableWorld, Vec3, World
 from tactile_kb.types import FloatArray
 
 __all__ = ["Completer", "Controller", "Ending", "Mark", "Probe", "ServoParams"]
@@ -211,6 +212,10 @@ class Probe:
     """Aim at the middle of the hint box (the visual estimate of where the object is) rather
     than at ``target``'s horizontal position: for a side never touched, where the touched
     points say little about where the object's middle is."""
+    facing: Vec3 | None = None
+    """Where the tip should point during the approach (the head indexed to the pose whose pole
+    is nearest, :meth:`~tactile_kb.touch.finger.Finger.index_towards`), for a probe that may
+    meet a surface of unknown slope; ``None``: the pose that faces ``normal``."""
 
 
 @dataclass(frozen=True)
@@ -293,7 +298,13 @@ class Controller:
         self.extra_params = dict(extra_params or {})
         self.finger = world.finger
         self.rho = float(self.finger.radius)
-        self._dirs = self.finger.matrix
+        self.orientation = VERTICAL
+        if isinstance(world, OrientableWorld):
+            self.orientation = world.orientation
+        self._dirs = self.finger.directions_at(self.orientation)
+        self.orientations: list[tuple[int, float, float]] = []
+        self.blind: list[tuple[Vec3, Vec3]] = []  # (tip centre, motion direction), no sensor
+        self.indexes = 0  # head indexings
         hint = world.hint
         height = max(float(hint.hi[2]), 2.0 * self.rho)
         self.z_step = self.params.z_step or max(0.35 * height, 0.5 * self.rho)
@@ -328,6 +339,8 @@ class Controller:
     def _track(self, m: Motion) -> Motion:
         if m.event in ("touch", "blocked"):
             m = self._reread(m)
+        if m.event == "blocked" and m.kind == "move" and not m.fired and m.distance > 0.0:
+            self.blind.append((m.measured, m.direction))
         self.motions += 1
         self._layer_motions += 1
         if self._last_pos is None or m.start != self._last_pos:
@@ -416,6 +429,7 @@ class Controller:
             kind=kind,
             phase=self._phase,
             layer=self._layer,
+            orientation=(self.orientation.tilt_deg, self.orientation.turn_deg),
         )
         self.contacts.append(c)
         return c
@@ -461,6 +475,8 @@ class Controller:
             + ([f"{self.rides} surface irregularities ridden over"] if self.rides else []),
             ending=self.ending.status if self.ending else "",
             unreachable=list(self.ending.unreachable) if self.ending else [],
+            orientations=list(self.orientations),
+            blind=list(self.blind),
         )
 
     # the exploration ---------------------------------------------------------------------------
@@ -510,6 +526,15 @@ class Controller:
                         self._note(f"stopped after {self.params.max_layers} layers")
                     break
                 nxt = self._z_increment(pos, follow, _centre(layer_contacts))
+                if nxt is None and z + self.z_step < top - self.rho:
+                    # the contact was lost below the top of the visual estimate (a step up the
+                    # object, as from an L-block's foot to its leg): a new first contact there
+                    nxt = self._first_contact([z + self.z_step], quiet=True)
+                    if nxt is not None:
+                        self._note(
+                            f"contact lost after the z increment to {z + self.z_step:.4f} m "
+                            "below the top of the visual estimate: found again by a new approach"
+                        )
                 if nxt is None:
                     break
                 pos, follow = nxt
@@ -560,10 +585,36 @@ class Controller:
         The way there goes up over the hint box, across to above the start of the approach,
         and down to it (each leg in free space: anything met on the way ends the probe). The
         touch is followed by a short slide each way along the surface (more tip centres on it).
+        With the head indexed away from the vertical, the finger then backs out along the
+        approach (a tip under an overhang cannot leave upwards).
+        """
+        start = len(self.path)
+        done = self._probe(p)
+        if not self.orientation.vertical and self._last_pos is not None and len(self.path) > start:
+            here = np.asarray(self._last_pos, dtype=float)
+            self._move_on(here, _unit(np.asarray(p.normal, dtype=float)), self.reach)
+        return done
+
+    def _probe(self, p: Probe) -> bool:
+        """Touch the surface asked for by ``p``; whether a sensor facing it closed.
+
+        The way there goes up over the hint box, across to above the start of the approach,
+        and down to it (each leg in free space: anything met on the way ends the probe). The
+        touch is followed by a short slide each way along the surface (more tip centres on it).
         """
         normal = _unit(np.asarray(p.normal, dtype=float))
-        if self.finger.nearest(_v3(-normal)) is None:
-            self._note(f"no sensor of finger {self.finger.name!r} faces a probe ({p.reason})")
+        pose: Orientation | None
+        if isinstance(self.world, OrientableWorld) and p.facing is not None:
+            pose = self.finger.index_towards(p.facing)
+        elif isinstance(self.world, OrientableWorld):
+            pose = self.finger.index_for(_v3(normal))
+        else:
+            pose = VERTICAL if self.finger.nearest(_v3(-normal)) is not None else None
+        if pose is None:
+            self._note(
+                f"no sensor of finger {self.finger.name!r} faces a probe ({p.reason}) "
+                "in any pose of its head"
+            )
             return False
         target = np.asarray(p.target, dtype=float)
         hint = self.world.hint
@@ -588,7 +639,7 @@ class Controller:
                 f"a probe ({p.reason}) would start outside the workspace at {_fmt(_v3(far))}"
             )
             return False
-        if not self._go_round(far, p.reason):
+        if not self._go_round(far, p.reason, pose):
             return False
         here = np.asarray(self._last_pos, dtype=float)
         m = self._move(here, -normal, float(np.linalg.norm(far - target)) + p.reach)
@@ -619,8 +670,30 @@ class Controller:
                 break
         return True
 
-    def _go_round(self, goal: FloatArray, why: str) -> bool:
-        """Move from where the finger is to ``goal`` over the top of the hint box."""
+    def _index(self, pose: Orientation, here: FloatArray, why: str) -> bool:
+        """Index the head to ``pose`` with the tip centre at ``here`` (in free space)."""
+        if pose == self.orientation:
+            return True
+        if not isinstance(self.world, OrientableWorld):
+            self._note(f"the world cannot index the head for a probe ({why})")
+            return False
+        try:
+            world = self.world.oriented(pose, _v3(here))
+        except ExplorationError as exc:
+            self._note(f"a probe ({why}): {exc}")
+            return False
+        self.world = world
+        self.orientation = pose
+        self._dirs = self.finger.directions_at(pose)
+        self.indexes += 1
+        if self._last_pos is None or _v3(here) != self._last_pos:
+            self.path.append(_v3(here))
+        self.orientations.append((len(self.path) - 1, pose.tilt_deg, pose.turn_deg))
+        return True
+
+    def _go_round(self, goal: FloatArray, why: str, pose: Orientation | None = None) -> bool:
+        """Move from where the finger is to ``goal`` over the top of the hint box, indexing the
+        head to ``pose`` up there (in free space above the object)."""
         hint = self.world.hint
         safe = float(hint.hi[2]) + self.rho + self.params.approach_margin
         here = np.asarray(self._last_pos, dtype=float)
@@ -649,48 +722,120 @@ class Controller:
             if float(np.linalg.norm(away)) > 0.5:
                 m = self._move_on(here, away, self.rho)
                 here = np.asarray(m.end, dtype=float)
-        for waypoint in (
-            np.array([here[0], here[1], max(safe, float(here[2]))]),
-            np.array([goal[0], goal[1], max(safe, float(goal[2]))]),
-            goal,
+        for leg, waypoint in enumerate(
+            (
+                np.array([here[0], here[1], max(safe, float(here[2]))]),
+                np.array([goal[0], goal[1], max(safe, float(goal[2]))]),
+                goal,
+            )
         ):
+            if leg == 1 and pose is not None and not self._index(pose, here, why):
+                return False
             d = waypoint - here
             length = float(np.linalg.norm(d))
             if length < 1e-9:
                 continue
             m = self._move_on(here, d / length, length)
             here = np.asarray(m.end, dtype=float)
+            if leg == 0 and m.event not in ("none", "release", "limit"):
+                # under an overhang (a lying prism's lower side): out of the object's
+                # footprint horizontally, then up
+                m = self._out_and_up(here, safe)
+                here = np.asarray(m.end, dtype=float)
             if m.event not in ("none", "release"):
                 self._note(f"the way to a probe ({why}) is blocked at {_fmt(m.end)} ({m.event})")
                 return False
         return True
 
-    def _first_contact(self) -> tuple[FloatArray, _Follow]:
-        """Approach the object horizontally (+x) on lines across the hint until a sensor closes."""
+    def _out_and_up(self, here: FloatArray, safe: float) -> Motion:
+        """Leave the hint box's footprint horizontally (away from its middle), then rise to
+        ``safe``; the last motion."""
+        hint = self.world.hint
+        lo, hi = np.asarray(hint.lo, dtype=float), np.asarray(hint.hi, dtype=float)
+        away = np.array([here[0] - 0.5 * (lo[0] + hi[0]), here[1] - 0.5 * (lo[1] + hi[1]), 0.0])
+        if float(np.linalg.norm(away)) < 1e-9:
+            away = np.array([1.0, 0.0, 0.0])
+        away = _unit(away)
+        clear = self.rho + self.params.approach_margin
+        out = min(
+            ((hi[k] if away[k] > 0 else lo[k]) - here[k]) / away[k]
+            for k in range(2)
+            if abs(away[k]) > 1e-9
+        )
+        m = self._move_on(here, away, max(float(out), 0.0) + clear)
+        if m.event not in ("none", "release"):
+            return m
+        here = np.asarray(m.end, dtype=float)
+        if safe - float(here[2]) < 1e-9:
+            return m
+        return self._move_on(here, _Z, safe - float(here[2]))
+
+    @overload
+    def _first_contact(
+        self, heights: list[float] | None = None, *, quiet: Literal[False] = False
+    ) -> tuple[FloatArray, _Follow]: ...
+
+    @overload
+    def _first_contact(
+        self, heights: list[float] | None = None, *, quiet: Literal[True]
+    ) -> tuple[FloatArray, _Follow] | None: ...
+
+    def _first_contact(
+        self, heights: list[float] | None = None, *, quiet: bool = False
+    ) -> tuple[FloatArray, _Follow] | None:
+        """Approach the object horizontally (+x) on lines across the hint until a sensor closes.
+
+        When every approach along +x met the object only where no sensor faces (a side leaning
+        over the finger: an oblique block on the table), the same lines are tried along −x,
+        then +y and −y."""
         hint = self.world.hint
         gap = self.rho + self.params.approach_margin
-        x0 = float(hint.lo[0]) - gap
-        length = float(hint.size[0]) + 2 * gap
-        yc, qy = float(hint.centre[1]), float(hint.size[1]) / 6.0
-        ys = [yc + k * qy for k in (0.1, 1.1, -0.9, 2.1, -1.9)]
-        heights = [self.z_first]
-        while heights[-1] + self.z_step < float(hint.hi[2]):
-            heights.append(heights[-1] + self.z_step)
-        for z in heights:
-            for y in ys:
-                start = (x0, y, z)
-                if not self.world.workspace.contains(start):
-                    continue
-                m = self._move(start, (1.0, 0.0, 0.0), length)
-                if m.event == "touch":
-                    f = self._follow(m.closed)
-                    self._record(m, f, "touch")
-                    return np.asarray(m.end, dtype=float), f
-                if m.event == "blocked":
-                    self._note(f"blind contact (no sensor fired) at {_fmt(m.end)}")
+        lo, hi = np.asarray(hint.lo, dtype=float), np.asarray(hint.hi, dtype=float)
+        if heights is None:
+            heights = [self.z_first]
+            while heights[-1] + self.z_step < float(hint.hi[2]):
+                heights.append(heights[-1] + self.z_step)
+        tried = []
+        sides = [(axis, sign, False) for axis, sign in ((0, 1.0), (0, -1.0), (1, 1.0), (1, -1.0))]
+        if isinstance(self.world, OrientableWorld) and self.finger.wrist is not None:
+            # every side leaning over the finger (a frustum on its small end): the head indexed
+            # towards the approach and up
+            sides += [(axis, sign, True) for axis, sign, _ in sides]
+        for axis, sign, tilted in sides:
+            across = 1 - axis
+            x0 = float(lo[axis]) - gap if sign > 0 else float(hi[axis]) + gap
+            length = float(hi[axis] - lo[axis]) + 2 * gap
+            yc, qy = 0.5 * float(lo[across] + hi[across]), float(hi[across] - lo[across]) / 6.0
+            ys = [yc + k * qy for k in (0.1, 1.1, -0.9, 2.1, -1.9)]
+            direction = np.zeros(3)
+            direction[axis] = sign
+            tried.append(f"{'+' if sign > 0 else '-'}{'xy'[axis]}" + (" tilted" if tilted else ""))
+            blind = False
+            for z in heights:
+                for y in ys:
+                    start = np.zeros(3)
+                    start[axis], start[across], start[2] = x0, y, z
+                    if not self.world.workspace.contains(_v3(start)):
+                        continue
+                    if tilted:
+                        pose = self.finger.index_towards(_v3(_unit(direction + _Z)))
+                        if not self._index(pose, start, "first contact"):
+                            continue
+                    m = self._move(_v3(start), _v3(direction), length)
+                    if m.event == "touch":
+                        f = self._follow(m.closed)
+                        self._record(m, f, "touch")
+                        return np.asarray(m.end, dtype=float), f
+                    if m.event == "blocked":
+                        blind = True
+                        self._note(f"blind contact (no sensor fired) at {_fmt(m.end)}")
+            if not blind:
+                break  # nothing there at all: no other side will find it
+        if quiet:
+            return None
         raise ExplorationError(
-            f"the finger never touched the object ({len(heights) * len(ys)} approaches along +x "
-            f"at heights {', '.join(f'{h:.3f}' for h in heights)} m)"
+            f"the finger never touched the object ({len(heights) * 5} approaches along "
+            f"{', '.join(tried)} at heights {', '.join(f'{h:.3f}' for h in heights)} m)"
         )
 
     def _tangent(self, f: _Follow) -> FloatArray | None:

@@ -37,6 +37,7 @@ Examples
 
 from __future__ import annotations
 
+import copy
 import itertools
 import math
 from collections.abc import Iterator, Sequence
@@ -46,10 +47,10 @@ import trimesh
 from numpy.typing import NDArray
 from scipy.spatial import cKDTree
 
-from tactile_kb.errors import UsageError
+from tactile_kb.errors import ExplorationError, UsageError
 from tactile_kb.settings import DEFAULTS, current
 from tactile_kb.touch.explorers import WorldExplorer
-from tactile_kb.touch.finger import Finger
+from tactile_kb.touch.finger import VERTICAL, Finger, Orientation
 from tactile_kb.touch.world import (
     Box,
     Event,
@@ -129,6 +130,12 @@ class StepperWorld:
         Where the tip centre may go; default :func:`default_workspace` of the mesh bounds.
     hint_margin
         How much the :attr:`hint` box exceeds the object's bounds (metres).
+    orientation
+        The head's pose (:class:`~tactile_kb.touch.finger.Orientation`); :meth:`oriented` gives
+        the same world with the head indexed to another pose. The sensors turn with the head;
+        the finger's shaft (when it has a ``shaft_radius``) is a cylinder of that radius along
+        the head's axis from the tip, modelled as a chain of balls ``0.75 × radius`` apart,
+        and blocks a motion where it would enter the object or the table.
     """
 
     def __init__(
@@ -138,10 +145,13 @@ class StepperWorld:
         *,
         workspace: Workspace | None = None,
         hint_margin: float = 0.005,
+        orientation: Orientation = VERTICAL,
     ) -> None:
         self._finger = finger
         self._rho = float(finger.radius)
-        self._dirs = finger.matrix
+        self._orientation = orientation
+        self._dirs = finger.directions_at(orientation)
+        self._axis = np.asarray(orientation.axis, dtype=float)
         self._cos = finger.cos_cone
         v = np.array(mesh.vertices, dtype=float)
         f = np.array(mesh.faces, dtype=np.int64)
@@ -176,6 +186,7 @@ class StepperWorld:
             self._vtree = cKDTree(self._verts)
         self._near: tuple[NDArray[np.intp], NDArray[np.intp], NDArray[np.intp]] | None = None
         bounds = np.array(mesh.bounds, dtype=float)
+        self._bounds = bounds
         self._workspace = workspace or default_workspace(bounds, self._rho)
         self._hint = Box(lo=_v3(bounds[0] - hint_margin), hi=_v3(bounds[1] + hint_margin))
 
@@ -194,6 +205,93 @@ class StepperWorld:
     def hint(self) -> Box:
         """The object's bounds plus ``hint_margin``: the visual estimate."""
         return self._hint
+
+    @property
+    def orientation(self) -> Orientation:
+        """The head's pose."""
+        return self._orientation
+
+    def oriented(self, orientation: Orientation, at: Vec3 | None = None) -> StepperWorld:
+        """The same world with the head indexed to ``orientation``.
+
+        With ``at`` (the tip centre where the head turns), a pose whose shaft would be inside
+        the object or the table there raises :class:`~tactile_kb.errors.ExplorationError`.
+        """
+        out = copy.copy(self)
+        out._orientation = orientation
+        out._dirs = self._finger.directions_at(orientation)
+        out._axis = np.asarray(orientation.axis, dtype=float)
+        if at is not None and out.shaft_collides(at):
+            raise ExplorationError(
+                f"the head at tilt {orientation.tilt_deg:g}°, turn {orientation.turn_deg:g}° "
+                f"collides with the object or the table at {tuple(round(c, 4) for c in at)}: "
+                "index the head elsewhere"
+            )
+        return out
+
+    def shaft_collides(self, centre: Vec3) -> bool:
+        """Whether the shaft enters the object or the table with the tip centre at ``centre``."""
+        a = np.asarray(centre, dtype=float)
+        return self._shaft_block(a, np.array([1.0, 0.0, 0.0]), 0.0, inside=True) <= 0.0
+
+    def _shaft_balls(self, a: FloatArray, u: FloatArray, reach: float) -> FloatArray:
+        """Offsets along the axis of the shaft's balls that can meet the object during the
+        motion a + t·u, 0 ≤ t ≤ reach (the others stay clear of the mesh's bounding box)."""
+        rs = float(self._finger.shaft_radius or 0.0)
+        rho = self._rho
+        s = np.arange(max(rho - rs, 0.0), self._finger.shaft_length + 1e-12, 0.75 * rs)
+        lo = self._bounds[0] - rs - 1e-9
+        hi = self._bounds[1] + rs + 1e-9
+        starts = a[None, :] + s[:, None] * self._axis[None, :]
+        t0 = np.zeros(len(s))
+        t1 = np.full(len(s), float(reach))
+        for k in range(3):  # slab test of each ball's swept segment against the box
+            if abs(u[k]) < 1e-15:
+                out = (starts[:, k] < lo[k]) | (starts[:, k] > hi[k])
+                t1 = np.where(out, -1.0, t1)
+                continue
+            ta = (lo[k] - starts[:, k]) / u[k]
+            tb = (hi[k] - starts[:, k]) / u[k]
+            t0 = np.maximum(t0, np.minimum(ta, tb))
+            t1 = np.minimum(t1, np.maximum(ta, tb))
+        out_s: FloatArray = s[t0 <= t1]
+        return out_s
+
+    def _shaft_block(
+        self, a: FloatArray, u: FloatArray, limit: float, *, inside: bool = False
+    ) -> float:
+        """Where along the motion the shaft would enter the object or the table (``inf``:
+        nowhere); with ``inside``, 0 when it is in them at the start."""
+        rs = self._finger.shaft_radius
+        if rs is None:
+            return math.inf
+        best = math.inf
+        w = self._axis
+        tol = current().world.block_tol
+        # the table: the lowest ball's bottom stays above z = 0
+        low = float(a[2]) + min(0.0, float(w[2]) * self._finger.shaft_length) - rs
+        if float(w[2]) < -1e-12:
+            if low < -tol:
+                return 0.0
+            if u[2] < -1e-15:
+                best = min(best, low / -float(u[2]))
+        saved = self._near
+        try:
+            for s in self._shaft_balls(a, u, limit):
+                c = a + s * w
+                if self._dense:
+                    self._near = self._near_segment(c, u, limit, rs)
+                lo, hi = self._intervals(c, u, rs - tol)
+                if inside:
+                    if ((lo < 0.0) & (hi > 0.0)).any():
+                        return 0.0
+                    continue
+                real = (hi - lo > _EPS_T) & (hi > _EPS_T) & (lo > -1e-10) & (lo <= limit)
+                if real.any():
+                    best = min(best, float(max(0.0, lo[real].min())))
+        finally:
+            self._near = saved
+        return best
 
     # sensing ------------------------------------------------------------------------------------
     def _touching(self, pts: FloatArray) -> tuple[NDArray[np.intp], FloatArray]:
@@ -478,7 +576,7 @@ class StepperWorld:
         room: float,
         reach: float,
     ) -> Motion:
-        t_block = self._block_at(a, u, reach)
+        t_block = min(self._block_at(a, u, reach), self._shaft_block(a, u, reach))
         end_t = min(reach, t_block)
         if t_block <= reach:
             end_t = max(0.0, t_block - 1e-10)

@@ -61,7 +61,7 @@ from typing import Literal, Protocol, runtime_checkable
 import numpy as np
 
 from tactile_kb.settings import DEFAULTS
-from tactile_kb.touch.finger import Finger
+from tactile_kb.touch.finger import Finger, Orientation
 from tactile_kb.types import FloatArray, Vec3
 
 __all__ = [
@@ -71,6 +71,7 @@ __all__ = [
     "Event",
     "Motion",
     "MotionKind",
+    "OrientableWorld",
     "Vec3",
     "Workspace",
     "World",
@@ -244,6 +245,28 @@ class World(Protocol):
         without a change, ``"limit"`` or ``"none"``. Not in contact at ``start`` → a
         ``"release"`` of ``sensor`` at distance 0.
         """
+        ...
+
+
+@runtime_checkable
+class OrientableWorld(World, Protocol):
+    """A world whose finger has an indexing head (:class:`~tactile_kb.touch.finger.Wrist`).
+
+    The head's pose is part of the world's value, like its finger: :meth:`oriented` returns the
+    same world with the head at another pose (sharing the object and, for a physical world,
+    the simulation), so the motions keep their signatures. In every pose the sensors answer in
+    the world frame (a sensor's direction is ``orientation.rotation @ d`` for its direction ``d``
+    in the finger frame), and the finger's shaft collides with the object: a motion the shaft
+    would make enter the object stops ``"blocked"``.
+    """
+
+    @property
+    def orientation(self) -> Orientation: ...
+
+    def oriented(self, orientation: Orientation, at: Vec3 | None = None) -> OrientableWorld:
+        """This world with the head at ``orientation``. With ``at`` (the tip centre where the
+        head turns), a pose that collides there raises
+        :class:`~tactile_kb.errors.ExplorationError` with a one-line message."""
         ...
 
 

@@ -1,0 +1,181 @@
+"""Objects in their stable poses: every family, every resting pose gravity leaves it in.
+
+Run: ``.venv/bin/python benchmarks/bench_poses.py [--turns N] [--family NAME ...] [--seed N]``.
+It never fails; it prints, per family and mode (exact contacts, 0.5 mm noise), the share of
+right answers, the median touches per face, and the wall time per object with the share of
+the motions' time spent with the head indexed away from the vertical; then every wrong case.
+
+The families are those of ``bench_accuracy.py`` (one random instance each) plus an
+icosahedron, an irregular tetrahedron, and L, T and U blocks (with the ``parallelepipeds``
+rules: an L, T or U block is not a hexahedron). Each is tried in every stable
+pose of ``trimesh.poses.compute_stable_poses`` with probability ≥ 2 % (a sphere, whose poses are
+all less probable: its most probable one, said so in the output), under ``--turns`` random
+turns about z. The true labels come from the construction (bench_accuracy's builders), never
+from the code under test: a pose changes where an object lies, not what it is.
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import statistics
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+import trimesh
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+
+from bench_accuracy import FAMILIES, NOISE, Family, faces_to_touch
+
+from tactile_kb import solids
+from tactile_kb.pipeline import classify
+from tactile_kb.touch.stepper import StepperExplorer, StepperWorld
+
+MIN_PROBABILITY = 0.02
+
+
+class _Clock:
+    """Seconds spent in motions, and the share of them with the head indexed."""
+
+    motions = 0.0
+    indexed = 0.0
+
+
+class _TimedWorld(StepperWorld):
+    def _run(self, kind, start, direction, length):  # type: ignore[no-untyped-def]
+        t = time.perf_counter()
+        try:
+            return super()._run(kind, start, direction, length)
+        finally:
+            dt = time.perf_counter() - t
+            _Clock.motions += dt
+            if not self.orientation.vertical:
+                _Clock.indexed += dt
+
+
+class _TimedExplorer(StepperExplorer):
+    def make_world(self, mesh, finger, *, seed):  # type: ignore[no-untyped-def]
+        del seed
+        return _TimedWorld(mesh, finger)
+
+
+def icosahedron(rng: np.random.Generator) -> tuple[trimesh.Trimesh, str, str]:
+    r = round(float(rng.uniform(0.02, 0.12)), 4)
+    m = trimesh.creation.icosahedron()
+    m.apply_scale(r)
+    return m, "other_polyhedron", f"icosahedron(circumradius {r})"
+
+
+def irregular_tetrahedron(rng: np.random.Generator) -> tuple[trimesh.Trimesh, str, str]:
+    while True:
+        pts = rng.uniform(-0.06, 0.06, size=(4, 3))
+        m = trimesh.convex.convex_hull(pts)
+        if m.volume > 2e-5 and min(m.area_faces) > 4e-4:
+            return m, "tetrahedron", f"hull of {np.round(pts, 4).tolist()}"
+
+
+def _blocks(name: str) -> Family:
+    def build(rng: np.random.Generator) -> tuple[trimesh.Trimesh, str, str]:
+        a, b = (round(float(rng.uniform(0.06, 0.12)), 4) for _ in range(2))
+        w, h = round(float(rng.uniform(0.02, 0.04)), 4), round(float(rng.uniform(0.02, 0.06)), 4)
+        maker = {"L": solids.l_shape, "T": solids.t_shape, "U": solids.u_shape}[name]
+        return maker(a, b, w, h), "not_hexahedron", f"{name}-block({a}, {b}, {w}, {h})"
+
+    return Family(f"{name}_block", "parallelepipeds", build)
+
+
+ALL = [
+    *FAMILIES,
+    Family("icosahedron", "polyhedra", icosahedron),
+    Family("irregular_tetrahedron", "polyhedra", irregular_tetrahedron),
+    *(_blocks(n) for n in "LTU"),
+]
+
+
+def stable_poses(mesh: trimesh.Trimesh) -> list[tuple[trimesh.Trimesh, float]]:
+    """``mesh`` in each stable pose of probability ≥ 2 %, resting on z = 0, centred."""
+    transforms, probs = trimesh.poses.compute_stable_poses(mesh)
+    out = []
+    best = int(np.argmax(probs))  # a sphere, no pose of which reaches 2 %: its most probable
+    for k, (t, p) in enumerate(zip(transforms, probs, strict=True)):
+        if p < MIN_PROBABILITY and not (k == best and probs[best] < MIN_PROBABILITY):
+            continue
+        m = mesh.copy()
+        m.apply_transform(t)
+        m.apply_translation((-m.bounds.mean(axis=0)[0], -m.bounds.mean(axis=0)[1], -m.bounds[0][2]))
+        out.append((m, float(p)))
+    return out
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("--turns", type=int, default=3)
+    ap.add_argument("--seed", type=int, default=0)
+    ap.add_argument("--family", nargs="*", default=None)
+    ap.add_argument("--exact-only", action="store_true")
+    args = ap.parse_args()
+    rng = np.random.default_rng(args.seed)
+    families = [f for f in ALL if not args.family or f.name in args.family]
+    modes = [0.0] if args.exact_only else [0.0, NOISE]
+    totals = {m: [0, 0] for m in modes}
+    wrong: list[str] = []
+    print(
+        f"{'family':24s} {'mode':6s} {'poses':>5s} {'right':>7s} {'touch/face':>10s} "
+        f"{'s/object':>8s} {'indexed':>7s}"
+    )
+    for fam in families:
+        mesh, label, what = fam.build(rng)
+        poses = stable_poses(mesh)
+        if poses and max(p for _, p in poses) < MIN_PROBABILITY:
+            print(f"  ({fam.name}: no pose reaches {MIN_PROBABILITY:.0%}; its most probable one)")
+        for noise in modes:
+            right = runs = 0
+            per_face: list[float] = []
+            secs: list[float] = []
+            _Clock.motions = _Clock.indexed = 0.0
+            for k, (posed, p) in enumerate(poses):
+                for _ in range(args.turns):
+                    ang = float(rng.uniform(0.0, 360.0))
+                    m = solids.rotate_about_z(posed, ang)
+                    t = time.perf_counter()
+                    try:
+                        r = classify(
+                            m, rules=fam.rules, noise=noise, seed=1, explorer=_TimedExplorer()
+                        )
+                        got, touches = r.decision.label, r.record.touches
+                    except Exception as exc:  # a benchmark reports, it does not stop
+                        got, touches = f"error: {type(exc).__name__}: {exc}"[:160], 0
+                    secs.append(time.perf_counter() - t)
+                    runs += 1
+                    per_face.append(touches / max(1, faces_to_touch(m)))
+                    if got == label:
+                        right += 1
+                    else:
+                        wrong.append(
+                            f"{fam.name} pose {k} (p={p:.2f}) turned {ang:.0f}° "
+                            f"noise {noise * 1000:g} mm: {got} (want {label}); {what}"
+                        )
+            totals[noise][0] += right
+            totals[noise][1] += runs
+            share = _Clock.indexed / _Clock.motions if _Clock.motions else 0.0
+            mode = "exact" if noise == 0 else f"{noise * 1000:g}mm"
+            print(
+                f"{fam.name:24s} {mode:6s} {len(poses):5d} {right:3d}/{runs:<3d} "
+                f"{statistics.median(per_face) if per_face else math.nan:10.2f} "
+                f"{statistics.mean(secs) if secs else math.nan:8.2f} {share:7.0%}",
+                flush=True,
+            )
+    for noise, (right, runs) in totals.items():
+        mode = "exact contacts" if noise == 0 else f"{noise * 1000:g} mm noise"
+        print(f"right answers, {mode}: {right}/{runs} = {right / max(1, runs):.1%}")
+    if wrong:
+        print("wrong:")
+        for w in wrong:
+            print("  " + w)
+
+
+if __name__ == "__main__":
+    main()

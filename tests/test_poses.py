@@ -1,0 +1,227 @@
+"""The indexing head: oriented sensors, the colliding shaft, probes under overhangs, poses."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+import trimesh
+
+from tactile_kb import solids
+from tactile_kb.errors import ExplorationError, LayoutFileError
+from tactile_kb.pipeline import classify
+from tactile_kb.record import ExplorationRecord
+from tactile_kb.touch.finger import VERTICAL, Orientation, Wrist, builtin_finger, load_layout
+from tactile_kb.touch.sensors import FaultySensors
+from tactile_kb.touch.stepper import StepperWorld
+from tactile_kb.touch.world import OrientableWorld
+
+
+def _cube() -> trimesh.Trimesh:
+    cube = trimesh.creation.box((0.1, 0.1, 0.1))
+    cube.apply_translation((0.0, 0.0, 0.05))
+    return cube
+
+
+def test_orientation_turns_the_pole_and_the_shaft() -> None:
+    # tilt 90 then turn 90: the pole (tip) points to −y, the shaft to +y
+    o = Orientation(90.0, 90.0)
+    assert np.allclose(o.pole, (0.0, -1.0, 0.0), atol=1e-12)
+    assert np.allclose(o.axis, (0.0, 1.0, 0.0), atol=1e-12)
+    assert np.allclose(VERTICAL.pole, (0.0, 0.0, -1.0))
+    f = builtin_finger("33")
+    d = f.directions_at(o)
+    assert np.allclose(d[0], o.pole)  # sensor 0 is the pole
+    assert np.allclose(np.linalg.norm(d, axis=1), 1.0)
+    # angles between sensors do not change
+    assert np.allclose(d @ d.T, f.matrix @ f.matrix.T)
+
+
+def test_wrist_poses_and_the_index_step() -> None:
+    w = Wrist(step_deg=30.0, max_tilt_deg=90.0)
+    poses = w.poses()
+    assert poses[0] == VERTICAL
+    assert len(poses) == 1 + 3 * 12  # tilts 30, 60, 90 × 12 turns
+    with pytest.raises(ValueError, match="divide 90"):
+        Wrist(step_deg=25.0)
+
+
+def test_an_index_step_not_dividing_90_is_a_located_error() -> None:
+    text = "name: x\ncone_deg: 30\nsensors:\n  - [1, 0, 0]\nwrist:\n  step_deg: 40\n"
+    with pytest.raises(LayoutFileError) as exc:
+        load_layout(text, file="f.yaml")
+    assert str(exc.value).startswith("f.yaml:6:13: wrist.step_deg:")
+    assert "divide 90" in str(exc.value)
+
+
+def test_a_ball_stylus_may_have_upper_sensors_and_a_stem() -> None:
+    text = (
+        "name: stylus\ncone_deg: 30\nshaft_radius: 0.001\nrings:\n"
+        "  - {elevation: 45, count: 6}\n  - {elevation: -45, count: 6}\n"
+        "sensors:\n  - [0, 0, -1]\n"
+    )
+    f = load_layout(text)
+    assert f.shaft_radius == 0.001
+    assert f.wrist == Wrist()
+    assert max(d[2] for d in f.directions) > 0.7
+    # an underside is faced by an upper sensor without indexing
+    assert f.index_for((0.0, 0.0, -1.0)) is not None
+
+
+def test_index_for_keeps_the_paper_finger_vertical_for_what_it_feels() -> None:
+    f = builtin_finger("33")
+    for n in [(1.0, 0.0, 0.0), (0.0, -1.0, 0.3), (0.6, 0.0, 0.8)]:
+        assert f.index_for(n) == VERTICAL
+    under = f.index_for((0.5, 0.0, -0.866))  # a face overhanging 60°
+    assert under is not None
+    assert not under.vertical
+    # a sensor of the indexed finger faces the surface, and the shaft leans away from it
+    n = np.array([0.5, 0.0, -0.866])
+    assert (f.directions_at(under) @ -n).max() >= f.cos_cone
+    assert float(np.asarray(under.axis) @ n) > 0.4
+    assert builtin_finger("33").model_copy(update={"wrist": None}).index_for(n) is None
+
+
+def test_the_turned_finger_touches_with_the_sensor_facing_the_face() -> None:
+    world = StepperWorld(_cube(), builtin_finger("33"))
+    turned = world.oriented(Orientation(90.0, 180.0))  # tip pointing +x
+    m = turned.move((-0.2, 0.0, 0.05), (1.0, 0.0, 0.0), 0.3)
+    assert m.event == "touch"
+    assert m.closed == (0,)
+    assert m.end[0] == pytest.approx(-0.055, abs=1e-6)
+    assert isinstance(world, OrientableWorld)
+
+
+def test_the_shaft_collides_with_the_object() -> None:
+    finger = builtin_finger("33").model_copy(update={"shaft_radius": 0.002, "shaft_length": 0.05})
+    world = StepperWorld(_cube(), finger)
+    # the shaft along +x, 5 cm ahead of the tip: moving +x, it meets the face x = -0.05 first
+    away = world.oriented(Orientation(90.0, 0.0))
+    m = away.move((-0.2, 0.0, 0.05), (1.0, 0.0, 0.0), 0.3)
+    assert m.event == "blocked"
+    # the tip centre stops where the shaft's end meets the face, less the shaft's radius
+    # (the last ball of the chain lies within one spacing, 1.5 mm, of the end)
+    assert m.end[0] == pytest.approx(-0.05 - 0.05 - 0.002, abs=0.0016)
+    assert away.shaft_collides((-0.08, 0.0, 0.05))
+    assert not world.shaft_collides((-0.2, 0.0, 0.05))  # vertical: the shaft goes up
+    with pytest.raises(ExplorationError, match=r"^the head at tilt 90°, turn 0° collides"):
+        world.oriented(Orientation(90.0, 0.0), at=(-0.08, 0.0, 0.05))
+    # the vertical finger passing under a slab: the tip would pass, the shaft hits its side
+    slab = trimesh.creation.box((0.1, 0.1, 0.02))
+    slab.apply_translation((0.06, 0.0, 0.05))  # x in [0.01, 0.11], z in [0.04, 0.06]
+    m = StepperWorld(slab, finger).move((-0.1, 0.0, 0.02), (1.0, 0.0, 0.0), 0.25)
+    assert m.event == "blocked"
+    assert m.end[0] == pytest.approx(0.01 - 0.002, abs=1e-6)
+    m = StepperWorld(slab, builtin_finger("33")).move((-0.1, 0.0, 0.02), (1.0, 0.0, 0.0), 0.25)
+    assert m.event in ("none", "limit")  # no shaft modelled: the tip passes under
+
+
+def test_faulty_sensors_pass_the_orientation_through() -> None:
+    world = FaultySensors(StepperWorld(_cube(), builtin_finger("33")), seed=1)
+    turned = world.oriented(Orientation(90.0, 180.0))
+    assert turned.orientation == Orientation(90.0, 180.0)
+    assert world.orientation == VERTICAL
+    assert turned.move((-0.2, 0.0, 0.05), (1.0, 0.0, 0.0), 0.3).closed == (0,)
+
+
+def _lying_hexagonal_prism() -> trimesh.Trimesh:
+    m = solids.prism(6, 0.03, 0.1)
+    transforms, probs = trimesh.poses.compute_stable_poses(m)
+    m.apply_transform(transforms[int(np.argmax(probs))])
+    m.apply_translation((-m.bounds.mean(axis=0)[0], -m.bounds.mean(axis=0)[1], -m.bounds[0][2]))
+    return m
+
+
+def test_a_hexagonal_prism_on_its_side_is_a_prism_with_six_sides() -> None:
+    m = _lying_hexagonal_prism()
+    # ground truth: lying on a side face; two lateral faces overhang by 30°
+    normals = np.unique(np.round(m.face_normals, 6), axis=0)
+    assert sum(1 for n in normals if -0.6 < n[2] < -0.4) == 2
+    r = classify(m, rules="polyhedra")
+    assert r.decision.label == "prism"
+    assert r.record.ending == "closed", r.record.unreachable
+    faces = r.model.contact_faces
+    assert len(faces) == 7  # 8 faces but the one on the table
+    # the overhanging faces were touched, by the indexed head
+    under = [f for f in faces if f.normal[2] < -0.4]
+    assert len(under) == 2
+    assert r.record.orientations
+    tilted = [c for c in r.record.contacts if c.orientation != (0.0, 0.0)]
+    assert tilted
+    assert all(c.orientation[0] > 0 for c in tilted)
+    for f in under:
+        assert math.degrees(math.acos(min(1.0, -f.normal[2]))) == pytest.approx(60.0, abs=3.0)
+
+
+def test_records_without_orientations_still_load() -> None:
+    rec = ExplorationRecord.from_json(
+        '{"version": 2, "finger": "33", "tip_radius": 0.005, "contacts": [{"step": 1, "centre": [0, 0, 0.01], "sensors": [0],'
+        ' "direction": [0, 0, -1], "point": [0, 0, 0.005]}]}'
+    )
+    assert rec.orientations == []
+    assert rec.contacts[0].orientation == (0.0, 0.0)
+
+
+def test_the_4_sensor_finger_stays_vertical_unless_given_a_wrist() -> None:
+    four = builtin_finger("4")
+    assert four.wrist is None  # the paper's finger: it never feels a top (an assumed top)
+    cube = solids.box(0.06, 0.06, 0.06)
+    plain = classify(cube, finger=four, rules="parallelepipeds")
+    assert plain.model.assumed_top is not None
+    assert plain.decision.label == "rectangular_parallelepiped"
+    # with an indexing head its equator sensors face down when tilted: the top is felt
+    wrist = classify(
+        cube, finger=four.model_copy(update={"wrist": Wrist()}), rules="parallelepipeds"
+    )
+    assert wrist.model.assumed_top is None
+    assert wrist.decision.label == "cube"
+    tops = [c for c in wrist.record.contacts if c.kind == "touch" and c.direction[2] < -0.5]
+    assert tops
+    assert all(c.orientation[0] > 0 for c in tops)
+
+
+def test_an_oblique_parallelepiped_in_every_stable_pose() -> None:
+    # ground truth from the construction: a parallelepiped with a 65° face angle and its top
+    # sheared by 12°, so that some sides lean over the finger in some poses
+    block = solids.parallelepiped(
+        0.09, 0.07, 0.05, angle_deg=65.0, shear_deg=12.0, shear_azimuth_deg=30.0
+    )
+    transforms, probs = trimesh.poses.compute_stable_poses(block)
+    poses = [t for t, p in zip(transforms, probs, strict=True) if p >= 0.02]
+    assert len(poses) == 6  # each face is a stable face
+    leaning = 0
+    for k, t in enumerate(poses):
+        posed = block.copy()
+        posed.apply_transform(t)
+        m = solids.rotate_about_z(solids.rest_on_face(posed, (0.0, 0.0, -1.0)), 47.0 * k)
+        truth = np.unique(np.round(m.face_normals, 6), axis=0)
+        assert len(truth) == 6
+        leaning += int((truth[:, 2] < -0.2).any())
+        r = classify(m, rules="polyhedra")
+        assert r.decision.label == "nonrectangular_parallelepiped", k
+        # closed, or what a probe could not confirm is named (never silently guessed)
+        assert r.record.ending in ("closed", "unreachable"), (k, r.record.unreachable)
+        assert (r.record.ending == "closed") == (not r.record.unreachable)
+        assert all(u.startswith("the face facing") for u in r.record.unreachable)
+        poly = r.model.polyhedron
+        assert poly is not None
+        assert len(poly.faces) == 6
+        # every face of the construction is in the model, within 3°
+        for n in truth:
+            assert float(np.max(poly.normals @ n)) >= math.cos(math.radians(3.0)), (k, n)
+    assert leaning >= 2  # poses with a side leaning over the finger were among them
+
+
+def test_a_frustum_on_its_small_end_is_met_with_the_head_indexed() -> None:
+    # ground truth: upside down, every side of the frustum leans over the vertical finger
+    m = solids.rest_on_face(solids.frustum(4, 0.0895, 0.041, 0.081), (0.0, 0.0, 1.0))
+    sides = np.unique(np.round(m.face_normals, 6), axis=0)
+    assert sum(1 for n in sides if -0.9 < n[2] < -0.2) == 4
+    r = classify(m, rules="polyhedra")
+    first = r.record.contacts[0]
+    assert first.kind == "touch"
+    assert first.orientation[0] > 0  # the vertical finger met every side blind
+    assert r.record.blind
+    assert r.decision.label == "frustum"
+    assert r.record.ending == "closed", r.record.unreachable
