@@ -959,7 +959,8 @@ def _edge_sigmas(model: ObjectModel) -> FloatArray:
         u = p.vertices[e[:, 1]] - p.vertices[e[:, 0]]
         u /= np.linalg.norm(u, axis=1)[:, None]
         c = cov[e[:, 0]] + cov[e[:, 1]]
-        return np.asarray(np.sqrt(np.einsum("ei,eij,ej->e", u, c, u)), dtype=float)
+        var = np.einsum("ei,eij,ej->e", u, c, u)  # ≥ 0 but for rounding
+        return np.asarray(np.sqrt(np.maximum(var, 0.0)), dtype=float)
 
     return _derived(model, (__name__, current().features, "edge_sigmas"), compute)
 
