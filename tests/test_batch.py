@@ -214,37 +214,51 @@ def test_same_seeds_same_answers_on_one_or_two_workers(dataset: Path) -> None:
     assert one[0]["path_length"] != one[1]["path_length"]
 
 
+def kill_once_then_classify(task: dict[str, Any]) -> dict[str, Any]:
+    """Batch work for the fault test, run in the worker: the first time it meets prism5.stl
+    with seed 0 it kills its own process (SIGKILL, as the OOM killer would), leaving a marker
+    beside the mesh; then, and for every other task, it classifies as the batch does."""
+    from tactile_kb.batch import run_task
+
+    marker = Path(task["object"] + ".killed")
+    if task["object"].endswith("prism5.stl") and task["seed"] == 0 and not marker.exists():
+        marker.touch()
+        os.kill(os.getpid(), signal.SIGKILL)
+    return run_task(task)
+
+
 def test_a_killed_worker_is_an_error_row_and_resume_redoes_it(
     dataset: Path, tmp_path: Path
 ) -> None:
-    psutil = pytest.importorskip("psutil")  # installed with the dask extra
+    # a copy of the objects, so that the kill's marker stays out of the shared folder
+    (tmp_path / "a").mkdir()
+    for name in ("a/brick.stl", "a/cube.stl", "b/prism5.stl"):
+        (tmp_path / "a" / Path(name).name).write_bytes((dataset / name).read_bytes())
     out = tmp_path / "r.jsonl"
-    killed: list[int] = []
-
-    def kill_the_other_workers(row: dict[str, Any]) -> None:
-        if killed:
-            return
-        pid = int(row["worker"].rsplit(":", 1)[1])  # this one is idle now; the others work
-        for other in psutil.Process(pid).parent().children():
-            if other.pid != pid:
-                os.kill(other.pid, signal.SIGKILL)
-                killed.append(other.pid)
-
-    inputs = [dataset / "a", dataset / "b" / "prism5.stl"]
-    summary = run_batch(
-        inputs, out, rules="polyhedra", seeds=(0, 1), workers=2, on_row=kill_the_other_workers
-    )
-    assert killed
+    work = f"{__name__}:kill_once_then_classify"
+    inputs = [tmp_path / "a"]  # brick, cube, prism5; seeds 0 and 1: six tasks
+    summary = run_batch(inputs, out, rules="polyhedra", seeds=(0, 1), workers=2, _work=work)
+    assert (tmp_path / "a" / "prism5.stl.killed").exists()
     rows = list(read_results(out))
     assert len(rows) == 6
     lost = [r for r in rows if "error" in r]
-    assert [r["error"]["kind"] for r in lost] == ["WorkerLost"]
+    assert [(r["error"]["kind"], r["object"][-10:], r["seed"]) for r in lost] == [
+        ("WorkerLost", "prism5.stl", 0)
+    ]
     assert "the worker process ended while classifying it" in lost[0]["error"]["message"]
+    assert "killed by signal 9" in lost[0]["error"]["message"]
     assert summary.errors == Counter({"WorkerLost": 1})
     # Resume: the lost task is run again, the others are not; every task is there once.
     again: list[dict[str, Any]] = []
     summary = run_batch(
-        inputs, out, resume=True, rules="polyhedra", seeds=(0, 1), workers=2, on_row=again.append
+        inputs,
+        out,
+        resume=True,
+        rules="polyhedra",
+        seeds=(0, 1),
+        workers=2,
+        on_row=again.append,
+        _work=work,
     )
     assert [r["index"] for r in again] == [lost[0]["index"]]
     rows = list(read_results(out))
