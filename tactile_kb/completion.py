@@ -162,11 +162,10 @@ def completion_probes(model: ObjectModel, *, height_gap: float | None = None) ->
     probes += _bottom_probes(model, centres, rho, gap)
     top_touched = max(float(c.point[2]) for c in record.contacts)
     for k, verts in enumerate(poly.faces):
-        index = model.face_of[k] if k < len(model.face_of) else -1
-        if index < 0:
+        found = _modelled_face(model, k)
+        if found is None:
             continue
-        face = model.faces[index]
-        n = np.asarray(face.normal, dtype=float)
+        face, n = found
         if face.source == "contacts" and n[2] >= current().explore.top_nz:
             probes += _top_probes(face, poly.vertices[list(verts)], centres, rho)
             continue
@@ -210,6 +209,16 @@ def completion_probes(model: ObjectModel, *, height_gap: float | None = None) ->
     return probes
 
 
+def _modelled_face(model: ObjectModel, k: int) -> tuple[Face, FloatArray] | None:
+    """The model face behind polyhedron face ``k`` and its unit normal, or None when the model
+    maps no face to it."""
+    index = model.face_of[k] if k < len(model.face_of) else -1
+    if index < 0:
+        return None
+    face = model.faces[index]
+    return face, np.asarray(face.normal, dtype=float)
+
+
 def _low_side_probes(model: ObjectModel, centres: FloatArray, rho: float) -> list[Probe]:
     """Probes from above at the top edge of each side face touched only in its lower half.
 
@@ -222,11 +231,10 @@ def _low_side_probes(model: ObjectModel, centres: FloatArray, rho: float) -> lis
     assert poly is not None
     out = []
     for k, verts in enumerate(poly.faces):
-        index = model.face_of[k] if k < len(model.face_of) else -1
-        if index < 0:
+        found = _modelled_face(model, k)
+        if found is None:
             continue
-        face = model.faces[index]
-        n = np.asarray(face.normal, dtype=float)
+        face, n = found
         if face.source != "contacts" or abs(n[2]) > 0.3 or not face.contacts:
             continue
         ring = poly.vertices[list(verts)]
@@ -398,11 +406,10 @@ def _bottom_probes(model: ObjectModel, centres: FloatArray, rho: float, gap: flo
     points = np.asarray([c.point for c in record.contacts], dtype=float).reshape(-1, 3)
     out = []
     for k in sorted(beside - set(table)):
-        index = model.face_of[k] if k < len(model.face_of) else -1
-        if index < 0:
+        found = _modelled_face(model, k)
+        if found is None:
             continue
-        face = model.faces[index]
-        n = np.asarray(face.normal, dtype=float)
+        face, n = found
         if face.source != "contacts" or abs(n[2]) < math.sin(math.radians(3.0)) or n[2] > 0.9:
             continue  # vertical faces meet the table as the layers saw them; tops do not
         if -math.sin(math.radians(20.0)) <= n[2] < 0.0:
