@@ -250,14 +250,23 @@ def _perpendicularity(model: ObjectModel, tolerance_deg: float, sigmas: float) -
     )
 
 
+_N = TypeVar("_N", int, float)
+
+
+def _default(value: _N | None, name: str) -> _N:
+    """``value``, or the current ``features.<name>`` setting when it is None."""
+    if value is None:
+        setting: _N = getattr(current().features, name)
+        return setting
+    return value
+
+
 def parallelism_table(
     model: ObjectModel, *, tolerance_deg: float | None = None, sigmas: float | None = None
 ) -> NDArray[np.bool_]:
     """(F, F) True where two faces are parallel (opposite normals within the tolerance)."""
-    if tolerance_deg is None:
-        tolerance_deg = current().features.tolerance_deg
-    if sigmas is None:
-        sigmas = current().features.sigmas
+    tolerance_deg = _default(tolerance_deg, "tolerance_deg")
+    sigmas = _default(sigmas, "sigmas")
     return _parallelism(model, tolerance_deg, sigmas).copy()
 
 
@@ -265,10 +274,8 @@ def perpendicularity_table(
     model: ObjectModel, *, tolerance_deg: float | None = None, sigmas: float | None = None
 ) -> NDArray[np.bool_]:
     """(F, F) True where two faces are perpendicular within the tolerance."""
-    if tolerance_deg is None:
-        tolerance_deg = current().features.tolerance_deg
-    if sigmas is None:
-        sigmas = current().features.sigmas
+    tolerance_deg = _default(tolerance_deg, "tolerance_deg")
+    sigmas = _default(sigmas, "sigmas")
     return _perpendicularity(model, tolerance_deg, sigmas).copy()
 
 
@@ -388,15 +395,13 @@ def lateral_edges(
     model: ObjectModel, *, horizontal_deg: float | None = None
 ) -> list[tuple[int, int]]:
     """Edges (vertex index pairs) on neither the base nor a top face."""
-    if horizontal_deg is None:
-        horizontal_deg = current().features.horizontal_deg
+    horizontal_deg = _default(horizontal_deg, "horizontal_deg")
     return list(_lateral(model, "lateral_edges", horizontal_deg).edges)
 
 
 def side_count(model: ObjectModel, *, horizontal_deg: float | None = None) -> int:
     """Number of lateral faces (neither base nor top): n of an n-gonal prism, pyramid, frustum."""
-    if horizontal_deg is None:
-        horizontal_deg = current().features.horizontal_deg
+    horizontal_deg = _default(horizontal_deg, "horizontal_deg")
     return len(_sides(model, "side_count", horizontal_deg))
 
 
@@ -431,8 +436,7 @@ def lateral_common_point(
     ``p = (Σ(I − ddᵀ))⁻¹ Σ(I − ddᵀ)a``; None when there are fewer than two lateral edges or
     the lines are (nearly) parallel, so that no finite point is determined.
     """
-    if horizontal_deg is None:
-        horizontal_deg = current().features.horizontal_deg
+    horizontal_deg = _default(horizontal_deg, "horizontal_deg")
     found = _common_point(model, horizontal_deg)
     return None if found is None else (found[0].copy(), found[1])
 
@@ -485,12 +489,9 @@ def surface_curved(
     measure its turn (:func:`spread_bend`): beyond ``spread_deg`` by two standard errors,
     curved; below it by two, the sensors' quantisation. Where the centres cannot tell, the
     face counts as one gentle fold towards ``min_smooth_edges``."""
-    if smooth_deg is None:
-        smooth_deg = current().features.smooth_deg
-    if spread_deg is None:
-        spread_deg = current().features.spread_deg
-    if min_smooth_edges is None:
-        min_smooth_edges = current().features.min_smooth_edges
+    smooth_deg = _default(smooth_deg, "smooth_deg")
+    spread_deg = _default(spread_deg, "spread_deg")
+    min_smooth_edges = _default(min_smooth_edges, "min_smooth_edges")
     rho = model.record.tip_radius
     noise = model.record.noise
     res_tol = (
@@ -806,10 +807,8 @@ def surface_plane(
     spread_deg: float | None = None,
 ) -> bool:
     """The surface is plane: touched somewhere, and not curved (see ``surface_curved``)."""
-    if smooth_deg is None:
-        smooth_deg = current().features.smooth_deg
-    if min_smooth_edges is None:
-        min_smooth_edges = current().features.min_smooth_edges
+    smooth_deg = _default(smooth_deg, "smooth_deg")
+    min_smooth_edges = _default(min_smooth_edges, "min_smooth_edges")
     return contact(model) and not surface_curved(
         model,
         residual_tol=residual_tol,
@@ -828,10 +827,8 @@ def lateral_edges_parallel(
     min_edges: int = 3,
 ) -> bool:
     """ "Vertical" (lateral) edges are parallel: all within ``tolerance_deg`` of their mean."""
-    if tolerance_deg is None:
-        tolerance_deg = current().features.tolerance_deg
-    if horizontal_deg is None:
-        horizontal_deg = current().features.horizontal_deg
+    tolerance_deg = _default(tolerance_deg, "tolerance_deg")
+    horizontal_deg = _default(horizontal_deg, "horizontal_deg")
     _, d = _lateral_lines(model, horizontal_deg)
     if len(d) < min_edges:
         return False
@@ -862,12 +859,9 @@ def lateral_edges_concurrent(
 ) -> bool:
     """ "Vertical" edges join at one point: their least-squares common point misses each line
     by at most ``point_tol`` × the object's diameter (RMS), and they are not parallel."""
-    if point_tol is None:
-        point_tol = current().features.point_tol
-    if tolerance_deg is None:
-        tolerance_deg = current().features.tolerance_deg
-    if horizontal_deg is None:
-        horizontal_deg = current().features.horizontal_deg
+    point_tol = _default(point_tol, "point_tol")
+    tolerance_deg = _default(tolerance_deg, "tolerance_deg")
+    horizontal_deg = _default(horizontal_deg, "horizontal_deg")
     _, d = _lateral_lines(model, horizontal_deg)
     if len(d) < min_edges or lateral_edges_parallel(
         model, tolerance_deg=tolerance_deg, horizontal_deg=horizontal_deg, min_edges=min_edges
@@ -907,10 +901,8 @@ def parallel_face_pairs(
     sigmas: float | None = None,
 ) -> bool:
     """Exactly ``count`` (or at least ``min``) pairs of parallel faces exist."""
-    if tolerance_deg is None:
-        tolerance_deg = current().features.tolerance_deg
-    if sigmas is None:
-        sigmas = current().features.sigmas
+    tolerance_deg = _default(tolerance_deg, "tolerance_deg")
+    sigmas = _default(sigmas, "sigmas")
     table = _parallelism(model, tolerance_deg, sigmas)
     pairs = int(np.triu(table, 1).sum())
     if min is not None:
@@ -922,10 +914,8 @@ def adjacent_faces_perpendicular(
     model: ObjectModel, *, tolerance_deg: float | None = None, sigmas: float | None = None
 ) -> bool:
     """Every two faces that share an edge are perpendicular."""
-    if tolerance_deg is None:
-        tolerance_deg = current().features.tolerance_deg
-    if sigmas is None:
-        sigmas = current().features.sigmas
+    tolerance_deg = _default(tolerance_deg, "tolerance_deg")
+    sigmas = _default(sigmas, "sigmas")
     p = _poly(model, "adjacent_faces_perpendicular")
     table = _perpendicularity(model, tolerance_deg, sigmas)
     ef = np.asarray(p.edge_faces, dtype=int).reshape(-1, 2)
@@ -984,8 +974,7 @@ def equal_edges(
 
     False on a model closed by an assumed top (``model.assumed_top``): the lateral edges'
     true length is unknown."""
-    if rel_tol is None:
-        rel_tol = current().features.rel_tol
+    rel_tol = _default(rel_tol, "rel_tol")
     if sigmas is None:
         sigmas = current().features.edge_sigmas
     p = _poly(model, "equal_edges")
@@ -1030,10 +1019,8 @@ def congruent_faces(
 ) -> bool:
     """All faces are congruent: same number of sides, side lengths and angles (False on a
     model closed by an assumed top, whose lateral faces' height is unknown)."""
-    if rel_tol is None:
-        rel_tol = current().features.rel_tol
-    if tolerance_deg is None:
-        tolerance_deg = current().features.tolerance_deg
+    rel_tol = _default(rel_tol, "rel_tol")
+    tolerance_deg = _default(tolerance_deg, "tolerance_deg")
     p = _poly(model, "congruent_faces")
     if model.assumed_top is not None:
         return False
@@ -1046,16 +1033,14 @@ def congruent_faces(
 def top_face(model: ObjectModel, *, horizontal_deg: float | None = None) -> bool:
     """A top face parallel to the base exists (the base: the table face, or a prism's or a
     frustum's end when it lies on a side)."""
-    if horizontal_deg is None:
-        horizontal_deg = current().features.horizontal_deg
+    horizontal_deg = _default(horizontal_deg, "horizontal_deg")
     _, top = _caps(model, "top_face", horizontal_deg)
     return bool(top)
 
 
 def lateral_faces_triangles(model: ObjectModel, *, horizontal_deg: float | None = None) -> bool:
     """Every lateral face (neither base nor top) is a triangle."""
-    if horizontal_deg is None:
-        horizontal_deg = current().features.horizontal_deg
+    horizontal_deg = _default(horizontal_deg, "horizontal_deg")
     p = _poly(model, "lateral_faces_triangles")
     sides = _sides(model, "lateral_faces_triangles", horizontal_deg)
     return bool(sides) and all(len(p.faces[f]) == 3 for f in sides)
@@ -1068,10 +1053,8 @@ def lateral_faces_vertical(
     horizontal_deg: float | None = None,
 ) -> bool:
     """Every lateral face is "vertical": perpendicular to the base within ``tolerance_deg``."""
-    if tolerance_deg is None:
-        tolerance_deg = current().features.tolerance_deg
-    if horizontal_deg is None:
-        horizontal_deg = current().features.horizontal_deg
+    tolerance_deg = _default(tolerance_deg, "tolerance_deg")
+    horizontal_deg = _default(horizontal_deg, "horizontal_deg")
     p = _poly(model, "lateral_faces_vertical")
     sides = _sides(model, "lateral_faces_vertical", horizontal_deg)
     base, _ = _caps(model, "lateral_faces_vertical", horizontal_deg)
@@ -1098,10 +1081,8 @@ def orthogonal_faces(
     object composed of rectangular parallelepipeds. Two normals count as parallel or
     perpendicular within ``max(tolerance_deg, sigmas · √(u₁² + u₂²))``, u the faces' normal
     uncertainties."""
-    if tolerance_deg is None:
-        tolerance_deg = current().features.tolerance_deg
-    if sigmas is None:
-        sigmas = current().features.sigmas
+    tolerance_deg = _default(tolerance_deg, "tolerance_deg")
+    sigmas = _default(sigmas, "sigmas")
 
     def compute() -> bool:
         n = np.asarray([f.normal for f in model.faces], dtype=float).reshape(-1, 3)
