@@ -807,8 +807,6 @@ def surface_plane(
     spread_deg: float | None = None,
 ) -> bool:
     """The surface is plane: touched somewhere, and not curved (see ``surface_curved``)."""
-    smooth_deg = _default(smooth_deg, "smooth_deg")
-    min_smooth_edges = _default(min_smooth_edges, "min_smooth_edges")
     return contact(model) and not surface_curved(
         model,
         residual_tol=residual_tol,
