@@ -235,21 +235,31 @@ def load_object(obj: ObjectLike, *, name: str | None = None) -> trimesh.Trimesh:
 
 
 def _keep_largest(mesh: trimesh.Trimesh, label: str, notes: list[str]) -> trimesh.Trimesh:
-    """The largest body of ``mesh`` when every other body is a speck (:data:`SPECK_FRACTION`)."""
+    """The largest body of ``mesh`` when every other body is a speck: under :data:`SPECK_FRACTION`
+    of its bounding-box diagonal, or under ``objects.speck_volume_fraction`` of its bounding-box
+    volume (a scanner's debris, or islands of surface cut off by holes)."""
     bodies = list(mesh.split(only_watertight=False))
     if len(bodies) < 2:
         return mesh
     sizes = np.array([float(np.linalg.norm(b.extents)) for b in bodies])
+    volumes = np.array([float(np.prod(b.extents)) for b in bodies])
     main = int(np.argmax(sizes))
     others = [k for k in range(len(bodies)) if k != main]
-    large = [k for k in others if sizes[k] >= current().objects.speck_fraction * sizes[main]]
+    limits = current().objects
+    large = [
+        k
+        for k in others
+        if sizes[k] >= limits.speck_fraction * sizes[main]
+        and volumes[k] >= limits.speck_volume_fraction * volumes[main]
+    ]
     if large:
         raise ObjectError(
             f"{label}: the mesh holds {len(bodies)} separate bodies; explore one object at a time"
         )
     notes.append(
         f"{label}: {len(others)} floating speck(s) dropped (each under "
-        f"{current().objects.speck_fraction:.0%} of the object's size); the largest body is explored"
+        f"{limits.speck_fraction:.0%} of the object's size or {limits.speck_volume_fraction:.0%} "
+        "of its bounding volume); the largest body is explored"
     )
     kept: trimesh.Trimesh = bodies[main]
     return kept

@@ -429,6 +429,13 @@ class ObjectSettings(_Group):
         description="Fraction: a separate body whose bounding-box diagonal is under this fraction "
         "of the largest body's is a floating speck and is dropped.",
     )
+    speck_volume_fraction: float = Field(
+        0.01,
+        gt=0,
+        lt=1,
+        description="Fraction: a separate body whose bounding box holds under this fraction of "
+        "the largest body's bounding-box volume is a floating speck too, however long it is.",
+    )
     workspace_half_width: float = Field(
         0.5,
         gt=0,

@@ -232,16 +232,26 @@ def test_floating_specks_are_dropped_with_a_note(tmp_path: Path) -> None:
     assert mesh.body_count == 1
     assert mesh.volume == pytest.approx(0.06 * 0.05 * 0.04)
     assert mesh.metadata[NOTES_KEY] == [
-        f"{path}: 3 floating speck(s) dropped (each under 10% of the object's size); "
-        "the largest body is explored"
+        f"{path}: 3 floating speck(s) dropped (each under 10% of the object's size or 1% "
+        "of its bounding volume); the largest body is explored"
     ]
     rec = StepperExplorer(completer=model_completer()).explore(path, seed=0)
     assert mesh.metadata[NOTES_KEY][0] in rec.notes
 
 
+def test_a_speck_large_beside_a_small_object_but_tiny_in_volume_is_dropped() -> None:
+    small = trimesh.creation.box((0.022, 0.022, 0.02))
+    speck = trimesh.creation.box((0.004, 0.004, 0.004))  # 20 % of the diagonal, 0.7 % of the volume
+    speck.apply_translation((0.03, 0.0, 0.0))
+    mesh = load_object(trimesh.util.concatenate([small, speck]), name="small")
+    assert mesh.body_count == 1
+    assert mesh.volume == pytest.approx(0.022 * 0.022 * 0.02)
+    assert "1 floating speck(s) dropped" in mesh.metadata[NOTES_KEY][0]
+
+
 def test_a_second_body_larger_than_a_speck_is_refused() -> None:
     a = trimesh.creation.box((0.06, 0.05, 0.04))
-    b = trimesh.creation.box((0.01, 0.01, 0.01))  # 17 % of the box's diagonal
+    b = trimesh.creation.box((0.02, 0.02, 0.02))  # 35 % of the box's diagonal, 6.7 % of its volume
     b.apply_translation((0.08, 0.0, 0.0))
     with pytest.raises(ObjectError, match="holds 2 separate bodies; explore one object at a time"):
         load_object(trimesh.util.concatenate([a, b]), name="two")
