@@ -206,7 +206,7 @@ def load_object(obj: ObjectLike, *, name: str | None = None) -> trimesh.Trimesh:
             "cannot be touched all round): degenerate mesh"
         )
     if not mesh.is_watertight:
-        mesh = _close(mesh, label, notes)
+        mesh = _close(mesh, notes)
     solid = mesh if mesh.is_watertight else mesh.convex_hull
     volume = abs(float(solid.volume))
     if volume < current().objects.min_size ** 3:
@@ -257,7 +257,7 @@ def _keep_largest(mesh: trimesh.Trimesh, label: str, notes: list[str]) -> trimes
             f"{label}: the mesh holds {len(bodies)} separate bodies; explore one object at a time"
         )
     notes.append(
-        f"{label}: {len(others)} floating speck(s) dropped (each under "
+        f"{len(others)} floating speck(s) dropped (each under "
         f"{limits.speck_fraction:.0%} of the object's size or {limits.speck_volume_fraction:.0%} "
         "of its bounding volume); the largest body is explored"
     )
@@ -265,19 +265,18 @@ def _keep_largest(mesh: trimesh.Trimesh, label: str, notes: list[str]) -> trimes
     return kept
 
 
-def _close(mesh: trimesh.Trimesh, label: str, notes: list[str]) -> trimesh.Trimesh:
+def _close(mesh: trimesh.Trimesh, notes: list[str]) -> trimesh.Trimesh:
     """``mesh`` with its holes filled by trimesh when it can; else as it is, with a note."""
     repaired = mesh.copy()
     with np.errstate(all="ignore"), warnings.catch_warnings():
         warnings.simplefilter("ignore")
         trimesh.repair.fill_holes(repaired)
     if repaired.is_watertight:
-        notes.append(f"{label}: holes in the mesh filled (trimesh.repair.fill_holes)")
+        notes.append("holes in the mesh filled (trimesh.repair.fill_holes)")
         return repaired
     trimesh.repair.fix_normals(mesh)  # type: ignore[no-untyped-call]
     boundary = int(np.sum(np.bincount(mesh.edges_unique_inverse) == 1))
     notes.append(
-        f"{label}: the mesh is open ({boundary} boundary edges trimesh cannot fill); "
-        "explored as it is"
+        f"the mesh is open ({boundary} boundary edges trimesh cannot fill); explored as it is"
     )
     return mesh

@@ -96,9 +96,7 @@ def test_a_mesh_with_a_hole_is_filled_with_a_note() -> None:
     mesh = load_object(open_box, name="lid.stl")
     assert mesh.is_watertight
     assert mesh.volume == pytest.approx(0.05**3)
-    assert mesh.metadata[NOTES_KEY] == [
-        "lid.stl: holes in the mesh filled (trimesh.repair.fill_holes)"
-    ]
+    assert mesh.metadata[NOTES_KEY] == ["holes in the mesh filled (trimesh.repair.fill_holes)"]
 
 
 def test_a_mesh_trimesh_cannot_close_is_explored_as_it_is() -> None:
@@ -109,9 +107,7 @@ def test_a_mesh_trimesh_cannot_close_is_explored_as_it_is() -> None:
     mesh = load_object(open_cup, name="cup.stl")
     assert not mesh.is_watertight
     (note,) = mesh.metadata[NOTES_KEY]
-    assert note == (
-        "cup.stl: the mesh is open (48 boundary edges trimesh cannot fill); explored as it is"
-    )
+    assert note == "the mesh is open (48 boundary edges trimesh cannot fill); explored as it is"
     rec = StepperExplorer(completer=model_completer()).explore(mesh, seed=0)
     assert note in rec.notes
     assert rec.touches > 0
@@ -232,7 +228,7 @@ def test_floating_specks_are_dropped_with_a_note(tmp_path: Path) -> None:
     assert mesh.body_count == 1
     assert mesh.volume == pytest.approx(0.06 * 0.05 * 0.04)
     assert mesh.metadata[NOTES_KEY] == [
-        f"{path}: 3 floating speck(s) dropped (each under 10% of the object's size or 1% "
+        "3 floating speck(s) dropped (each under 10% of the object's size or 1% "
         "of its bounding volume); the largest body is explored"
     ]
     rec = StepperExplorer(completer=model_completer()).explore(path, seed=0)
