@@ -66,43 +66,56 @@ centres lie along one line (:func:`completion_probes`)."""
 
 @dataclass(frozen=True)
 class CompletionParams:
-    """The budget and thresholds of the completion.
+    """The budget and thresholds of the completion; ``None`` takes the current settings
+    (``settings.current().explore``: ``completion_touches``, ``completion_path``,
+    ``completion_attempts``) when the completion runs.
 
     Attributes
     ----------
     touches
         At most this many touches spent by the completion (or two per face of the model, when
-        that is more; the path budget grows in proportion).
+        that is more; the path budget grows in proportion). Default 24.
     path
         At most this much tip-centre path (metres) spent by the completion, or three times the
         touched extent per touch of the budget when that is more (each probe goes round the
-        object).
+        object). Default 4 m.
     attempts
         Probes for one open item (a direction, a face) before it counts as unreachable (when
-        they found nothing, or what they found did not close it).
+        they found nothing, or what they found did not close it). Default 2.
     height_gap
         Tip centres on a face lie at two heights when they span at least this much in z
         (metres); ``None``: half the tip radius.
     """
 
-    touches: int = 24
-    path: float = 4.0
-    attempts: int = 2
+    touches: int | None = None
+    path: float | None = None
+    attempts: int | None = None
     height_gap: float | None = None
 
     def __post_init__(self) -> None:
-        if self.touches < 0 or self.attempts < 1:
+        if (self.touches is not None and self.touches < 0) or (
+            self.attempts is not None and self.attempts < 1
+        ):
             raise UsageError("completion touches must be ≥ 0 and attempts ≥ 1")
-        if not (math.isfinite(self.path) and self.path >= 0):
+        if self.path is not None and not (math.isfinite(self.path) and self.path >= 0):
             raise UsageError(f"completion path must be ≥ 0 metres, got {self.path}")
         if self.height_gap is not None and not (
             math.isfinite(self.height_gap) and self.height_gap > 0
         ):
             raise UsageError(f"completion height_gap must be > 0 metres, got {self.height_gap}")
 
+    def budget(self) -> tuple[int, float, int]:
+        """``(touches, path, attempts)``, the ``None`` ones from the current settings."""
+        s = current().explore
+        return (
+            s.completion_touches if self.touches is None else self.touches,
+            s.completion_path if self.path is None else self.path,
+            s.completion_attempts if self.attempts is None else self.attempts,
+        )
+
 
 DEFAULT_COMPLETION = CompletionParams()
-"""The completion's default budget: 24 touches, 4 m of path."""
+"""The completion's default budget: the current settings' (24 touches, 4 m of path)."""
 
 
 def _name(v: FloatArray) -> str:
@@ -538,7 +551,8 @@ class ModelCompleter:
         open_items = [p.reason for p in wanted]
         if model.polyhedron is None and not wanted:
             open_items = [model.open_reason or "the model is open"]
-        todo = [p for p in wanted if self._tried[p.reason] < self.params.attempts]
+        max_touches, max_path, attempts = self.params.budget()
+        todo = [p for p in wanted if self._tried[p.reason] < attempts]
         touches = record.touches - self._start[0]
         path = record.path_length - self._start[1]
         if not open_items:
@@ -560,12 +574,12 @@ class ModelCompleter:
             )
         # many-faced objects get two touches a face (an icosahedron: 40)
         faces = sum(1 for f in model.faces if f.source == "contacts")
-        budget = max(self.params.touches, 2 * faces) if self.params.touches else 0
-        scale = budget / self.params.touches if self.params.touches else 1.0
+        budget = max(max_touches, 2 * faces) if max_touches else 0
+        scale = budget / max_touches if max_touches else 1.0
         # a probe goes round the object: large objects get path in proportion to their size
         centres = np.asarray([c.centre for c in record.contacts], dtype=float).reshape(-1, 3)
         size = float(np.linalg.norm(np.ptp(centres, axis=0))) if len(centres) else 0.0
-        allowed = max(self.params.path * scale, 3.0 * size * budget)
+        allowed = max(max_path * scale, 3.0 * size * budget)
         if touches >= budget or path >= allowed:
             return Ending(
                 "budget",

@@ -149,6 +149,24 @@ class ExploreSettings(_Group):
         description="A face whose normal's z component is at least this is a top, probed from "
         "above when its tip centres lie along one line.",
     )
+    completion_touches: int = Field(
+        24,
+        ge=0,
+        description="The completion's touch budget: at most this many touches after contour "
+        "following (or two per face of the model, when that is more); 0: no completion.",
+    )
+    completion_path: float = Field(
+        4.0,
+        ge=0,
+        description="Metres: the completion's path budget (or three times the touched extent "
+        "per touch of the budget, when that is more).",
+    )
+    completion_attempts: int = Field(
+        2,
+        ge=1,
+        description="Probes for one open item (a direction, a face) before the completion "
+        "names it unreachable.",
+    )
 
 
 class GeometrySettings(_Group):

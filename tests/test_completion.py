@@ -120,6 +120,23 @@ def test_a_spent_budget_is_the_ending_with_its_touch_count() -> None:
     assert "complete" not in rec.contacts_per_phase
 
 
+def test_the_budget_defaults_live_in_the_settings() -> None:
+    from tactile_kb import settings
+
+    mesh = jittered(solids.box(*BOX), 0.0002, seed=1)
+    explorer = StepperExplorer(completer=model_completer())
+    with settings.override(explore={"completion_touches": 0}):
+        spent = explorer.explore(mesh, seed=0)
+    assert spent.ending == "budget"
+    assert explorer.explore(mesh, seed=0).ending == "closed"
+    # explicit parameters win over the settings
+    with settings.override(explore={"completion_touches": 0}):
+        assert CompletionParams(touches=5).budget() == (5, 4.0, 2)
+        assert CompletionParams().budget() == (0, 4.0, 2)
+    with pytest.raises(Exception, match=r"explore\.completion_attempts"):
+        settings.override(explore={"completion_attempts": 0})
+
+
 def test_what_the_finger_cannot_feel_is_named_unreachable() -> None:
     # the 4-sensor finger has no sensor pointing down: it can never feel a top
     rec = StepperExplorer(completer=model_completer()).explore(
