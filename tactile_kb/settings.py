@@ -28,13 +28,22 @@ Examples
 Traceback (most recent call last):
 ...
 tactile_kb.errors.UsageError: settings: features.tolerance_deg: Input should be greater than 0 (got -1.0)
+
+The command line takes the same changes as ``--set GROUP.FIELD=VALUE`` or from a TOML file
+(``--settings FILE``, one table per group): :meth:`Settings.assigned` and :func:`load`.
+
+>>> settings.DEFAULTS.assigned(["explore.completion_touches=10"]).changes()
+{'explore': {'completion_touches': 10}}
 """
 
 from __future__ import annotations
 
-from collections.abc import Iterator, Mapping
+import re
+import tomllib
+from collections.abc import Iterator, Mapping, Sequence
 from contextlib import AbstractContextManager, contextmanager
 from contextvars import ContextVar
+from pathlib import Path
 from typing import Any
 
 from pydantic import BaseModel, ConfigDict, Field, ValidationError
@@ -53,6 +62,7 @@ __all__ = [
     "Settings",
     "WorldSettings",
     "current",
+    "load",
     "override",
     "use",
 ]
@@ -476,6 +486,49 @@ class Settings(BaseModel):
     grasp: GraspSettings = Field(default_factory=GraspSettings)
     objects: ObjectSettings = Field(default_factory=ObjectSettings)
 
+    def assigned(self, assignments: Sequence[str]) -> Settings:
+        """A copy with ``GROUP.FIELD=VALUE`` assignments applied (the command line's
+        ``--set``), validated; values are converted to the field's type.
+
+        Raises
+        ------
+        UsageError
+            An assignment not of that form, an unknown group or field, or a value out of range.
+        """
+        groups: dict[str, dict[str, str]] = {}
+        for item in assignments:
+            name, eq, value = item.partition("=")
+            group, dot, field = name.strip().partition(".")
+            if not (eq and dot and group and field):
+                raise UsageError(
+                    f"--set {item!r}: expected GROUP.FIELD=VALUE, e.g. explore.completion_touches=10"
+                )
+            groups.setdefault(group, {})[field] = value.strip()
+        try:
+            return self.replaced(**groups)
+        except UsageError as exc:
+            text = str(exc).removeprefix("settings: ")
+            named = re.match(r"(\w+)\.(\w+):|no group '(\w+)'", text)
+            culprit = ""
+            if named:
+                group, field, missing = named.groups()
+                for item in assignments:
+                    g, _, rest = item.partition("=")[0].strip().partition(".")
+                    if (g, rest) == (group, field) or (missing is not None and g == missing):
+                        culprit = f" {item}"
+                        break
+            raise UsageError(f"--set{culprit}: {text}") from None
+
+    def changes(self) -> dict[str, dict[str, Any]]:
+        """The fields that differ from :data:`DEFAULTS`, by group (``{}`` for the defaults)."""
+        mine, base = self.model_dump(), Settings().model_dump()
+        out: dict[str, dict[str, Any]] = {}
+        for group, values in mine.items():
+            diff = {k: v for k, v in values.items() if base[group][k] != v}
+            if diff:
+                out[group] = diff
+        return out
+
     def replaced(self, **groups: Mapping[str, Any] | BaseModel) -> Settings:
         """A copy with the fields named in ``groups`` changed, validated.
 
@@ -503,6 +556,67 @@ class Settings(BaseModel):
 
 DEFAULTS = Settings()
 """The documented defaults."""
+
+
+def load(path: str | Path, base: Settings | None = None) -> Settings:
+    """The settings of a TOML file: one table per group, ``field = value`` in it, for example
+    ``[explore]`` then ``completion_touches = 10``; fields not named keep ``base`` (default
+    :data:`DEFAULTS`).
+
+    Raises
+    ------
+    UsageError
+        The file cannot be read, is not TOML, or names an unknown group or field or a value out
+        of range; the message names the file and, where it can, the line.
+    """
+    where = str(path)
+    try:
+        text = Path(path).read_text(encoding="utf-8")
+    except (OSError, UnicodeDecodeError) as exc:
+        raise UsageError(f"{where}: cannot read the settings file: {exc}") from None
+    try:
+        data = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        found = re.search(r"\(at line (\d+), column (\d+)\)", str(exc))
+        message = re.sub(r"\s*\(at line \d+, column \d+\)", "", str(exc))
+        at = f"{where}:{found.group(1)}:{found.group(2)}" if found else where
+        raise UsageError(f"{at}: not TOML: {message}") from None
+    groups: dict[str, Mapping[str, Any]] = {}
+    for name, table in data.items():
+        if not isinstance(table, dict):
+            line = _line_of(text, None, name)
+            raise UsageError(
+                f"{where}{line}: {name!r} must be a table of its fields ([{name}] and then "
+                "field = value lines)"
+            )
+        groups[name] = table
+    try:
+        return (base or DEFAULTS).replaced(**groups)
+    except UsageError as exc:
+        located = re.match(r"settings: (?:(\w+)\.(\w+)|no group '(\w+)')", str(exc))
+        line = ""
+        if located:
+            group, field, missing = located.groups()
+            line = _line_of(text, group, field) if group else _line_of(text, None, missing)
+        raise UsageError(f"{where}{line}: {str(exc).removeprefix('settings: ')}") from None
+
+
+def _line_of(text: str, group: str | None, key: str) -> str:
+    """``":N"`` for the line of ``[group]`` … ``key =`` in a TOML text (or of ``[key]`` when
+    ``group`` is None), ``""`` when it is not found."""
+    table: str | None = None
+    for n, line in enumerate(text.splitlines(), start=1):
+        stripped = line.strip()
+        header = re.fullmatch(r"\[\s*([\w.-]+)\s*\]", stripped)
+        if header:
+            table = header.group(1)
+            if group is None and table == key:
+                return f":{n}"
+            continue
+        if re.match(rf"{re.escape(key)}\s*=", stripped) and (table == group or group is None):
+            return f":{n}"
+    return ""
+
 
 _CURRENT: ContextVar[Settings] = ContextVar("tactile_kb_settings", default=DEFAULTS)
 

@@ -234,3 +234,27 @@ def test_batch_on_a_dask_scheduler_with_ship(
     assert [r.get("label") for r in rows] == [*LABELS.values(), None]
     assert rows[3]["error"]["kind"] == "ObjectError"
     assert all(r["correct"] == (i < 3) for i, r in enumerate(rows))
+
+
+def test_settings_reach_the_workers_and_key_the_rows(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    import math
+
+    import numpy as np
+
+    lean = box(0.08, 0.06, 0.05)
+    shear = np.eye(4)
+    shear[0, 2] = math.tan(math.radians(3.0))  # square within 5°, not within 1°
+    lean.apply_transform(shear)
+    lean.export(tmp_path / "lean.stl")
+    out = tmp_path / "r.jsonl"
+    args = ["batch", str(tmp_path / "lean.stl"), "--out", str(out), "--workers", "2"]
+    assert main(args) == 0
+    strict = ["--set", "features.tolerance_deg=1", "--set", "features.sigmas=0"]
+    assert main([*args, "--resume", *strict]) == 0  # other settings: not the same task
+    capsys.readouterr()
+    labels = sorted(r["label"] for r in _rows(out))
+    assert labels == ["nonrectangular_parallelepiped", "rectangular_parallelepiped"]
+    assert main([*args, "--resume", *strict]) == 0  # now done: nothing more
+    assert len(_rows(out)) == 2

@@ -205,3 +205,56 @@ def test_version(capsys: pytest.CaptureFixture[str]) -> None:
         main(["--version"])
     assert info.value.code == 0
     assert capsys.readouterr().out.startswith("tactile-kb ")
+
+
+def _leaning_box(path: Path) -> Path:
+    """A box whose two faces lean by 3°: square within the default 5°, not within 1°."""
+    import math
+
+    import numpy as np
+
+    mesh = box(0.08, 0.06, 0.05)
+    shear = np.eye(4)
+    shear[0, 2] = math.tan(math.radians(3.0))
+    mesh.apply_transform(shear)
+    mesh.export(path)
+    return path
+
+
+def test_settings_from_the_command_line_change_the_answer(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    lean = str(_leaning_box(tmp_path / "lean.stl"))
+    assert main(["classify", lean]) == 0
+    assert capsys.readouterr().out == f"{lean}- OBJECT IS A RECTANGULAR PARALLELEPIPED\n"
+    strict = ["--set", "features.tolerance_deg=1", "--set", "features.sigmas=0"]
+    assert main(["classify", lean, *strict]) == 0
+    assert capsys.readouterr().out == f"{lean}- OBJECT IS A NONRECTANGULAR PARALLELEPIPED\n"
+    toml = tmp_path / "strict.toml"
+    toml.write_text("[features]\ntolerance_deg = 1.0\nsigmas = 0.0\n")
+    assert main(["classify", lean, "--settings", str(toml)]) == 0
+    assert "NONRECTANGULAR" in capsys.readouterr().out
+    # --set comes after the file
+    assert (
+        main(["classify", lean, "--settings", str(toml), "--set", "features.tolerance_deg=5"]) == 0
+    )
+    assert "OBJECT IS A RECTANGULAR" in capsys.readouterr().out
+
+
+def test_bad_settings_on_the_command_line_are_one_line_and_exit_2(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    lean = str(_leaning_box(tmp_path / "lean.stl"))
+    toml = tmp_path / "bad.toml"
+    toml.write_text("[explore]\ncompletion_touches = -1\n")
+    for extra, message in [
+        (["--settings", str(toml)], f"{toml}:2: explore.completion_touches:"),
+        (["--set", "explore.completion_touches"], "expected GROUP.FIELD=VALUE"),
+        (["--set", "geometry.nope=1"], "--set geometry.nope=1: geometry.nope: Extra inputs"),
+    ]:
+        assert main(["classify", lean, *extra]) == 2
+        captured = capsys.readouterr()
+        assert captured.out == ""
+        (line,) = captured.err.splitlines()
+        assert line.startswith("tactile-kb classify: error: ")
+        assert message in line

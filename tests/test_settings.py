@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import math
 import threading
+from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -253,3 +254,57 @@ def test_the_docs_table_is_the_one_the_model_generates() -> None:
             rows.append(f"| `{group}.{name}` | {getattr(values, name)!r} | {info.description} |")
     text = (Path(__file__).parent.parent / "docs" / "settings.md").read_text(encoding="utf-8")
     assert "\n".join(rows) in text
+
+
+# --- the command line's settings: TOML files and GROUP.FIELD=VALUE assignments ---------------
+
+
+def test_a_settings_file_changes_only_what_it_names(tmp_path: Path) -> None:
+    path = tmp_path / "s.toml"
+    path.write_text("# budgets\n[explore]\ncompletion_touches = 40\n\n[features]\nsigmas = 0\n")
+    chosen = settings.load(path)
+    assert chosen.changes() == {"explore": {"completion_touches": 40}, "features": {"sigmas": 0.0}}
+    assert chosen.geometry == settings.DEFAULTS.geometry
+    assert settings.DEFAULTS.changes() == {}
+
+
+@pytest.mark.parametrize(
+    ("text", "message"),
+    [
+        (
+            "[explore]\ntop_nz = 0.5\ncompletion_touches = -3\n",
+            ":3: explore.completion_touches: Input should be greater than or equal to 0 (got -3)",
+        ),
+        ("[explore\n", ":1:9: not TOML: Expected ']' at the end of a table declaration"),
+        ("\n[explor]\nx = 1\n", ":2: no group 'explor' (groups: explore, features, finger,"),
+        ("[features]\ncut_deg = 3\n", ":2: features.cut_deg: Extra inputs are not permitted"),
+        ("explore = 3\n", ":1: 'explore' must be a table of its fields"),
+    ],
+)
+def test_a_bad_settings_file_is_one_located_line(tmp_path: Path, text: str, message: str) -> None:
+    path = tmp_path / "bad.toml"
+    path.write_text(text)
+    with pytest.raises(UsageError) as caught:
+        settings.load(path)
+    assert str(caught.value).startswith(f"{path}{message}")
+    assert "\n" not in str(caught.value)
+    with pytest.raises(UsageError, match="cannot read the settings file"):
+        settings.load(tmp_path / "missing.toml")
+
+
+def test_assignments_are_typed_and_located() -> None:
+    chosen = settings.DEFAULTS.assigned(
+        ["explore.completion_touches=7", " features.tolerance_deg = 2.5"]
+    )
+    assert chosen.explore.completion_touches == 7
+    assert chosen.features.tolerance_deg == 2.5
+    for bad, message in [
+        ("explore.completion_touches", "expected GROUP.FIELD=VALUE"),
+        ("completion_touches=3", "expected GROUP.FIELD=VALUE"),
+        ("explore.completion_touches=abc", "--set explore.completion_touches=abc: explore."),
+        ("nope.x=1", "--set nope.x=1: no group 'nope'"),
+        ("explore.nope=1", "--set explore.nope=1: explore.nope: Extra inputs"),
+    ]:
+        with pytest.raises(UsageError) as caught:
+            settings.DEFAULTS.assigned(["features.sigmas=1", bad])
+        assert message in str(caught.value)

@@ -15,6 +15,7 @@ from pathlib import Path
 from typing import Any
 
 from tactile_kb.batch.inputs import BatchItem, Row, Task
+from tactile_kb.settings import DEFAULTS, current, use
 
 DEFAULT_WORK = "tactile_kb.batch.tasks:run_task"
 """What a worker runs for a task (``module:function``; benchmarks put a stand-in there)."""
@@ -51,6 +52,7 @@ def make_tasks(
 ) -> Iterator[Task]:
     """One task per (object, seed), lazily: each file is read (hashed) only when its turn comes."""
     option_hashes: dict[str, str | None] = {}
+    changed = current().changes()  # the caller's settings travel with each task
     index = 0
     for item in items:
         opts = {**defaults, **item.options}
@@ -69,6 +71,8 @@ def make_tasks(
                 "options": opts,
                 "files": {n: option_hashes[str(opts[n])] for n in ("rules", "finger")},
             }
+            if changed:  # the defaults keep the keys they had
+                keyed["settings"] = changed
             key = hashlib.sha256(json.dumps(keyed, sort_keys=True).encode()).hexdigest()[:32]
             task: Task = {
                 "index": index,
@@ -80,6 +84,8 @@ def make_tasks(
                 "timeout": timeout,
                 "sha256": digest,
             }
+            if changed:
+                task["settings"] = changed
             if index_of is not None:
                 index_of[key] = index
             index += 1
@@ -141,10 +147,16 @@ _FINGERS: dict[str, Any] = {}
 
 
 def run_task(task: Task) -> Row:
-    """Classify one (object, seed) task in this process; every failure becomes an error row.
+    """Classify one (object, seed) task in this process, with the settings it carries; every
+    failure becomes an error row.
 
     This is what a worker runs: a local worker process or a Dask worker thread.
     """
+    with use(DEFAULTS.replaced(**task.get("settings", {}))):
+        return _run_task(task)
+
+
+def _run_task(task: Task) -> Row:
     started = time.perf_counter()
     cpu = time.process_time()
     try:

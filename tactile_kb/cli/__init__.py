@@ -26,7 +26,7 @@ import sys
 from collections.abc import Sequence
 from typing import NoReturn
 
-from tactile_kb.cli.options import error_message
+from tactile_kb.cli.options import chosen_settings, error_message
 from tactile_kb.errors import (
     PluginError,
     PluginUnavailableError,
@@ -129,7 +129,14 @@ def main(argv: Sequence[str] | None = None) -> int:
         return EXIT_USAGE
     prog = f"tactile-kb {args.command}"
     try:
-        code: int = args.func(args)
+        chosen = chosen_settings(args)
+        if chosen is None:
+            code: int = args.func(args)
+        else:
+            from tactile_kb.settings import use
+
+            with use(chosen):
+                code = args.func(args)
     except TactileKBError as exc:
         return report(exc, prog)
     except KeyboardInterrupt:

@@ -25,6 +25,7 @@ __all__ = [
     "add_object_inputs",
     "check_noise",
     "check_picture",
+    "chosen_settings",
     "exit_code_of",
     "nonnegative",
     "notices",
@@ -155,6 +156,30 @@ def add_exploration_options(p: argparse.ArgumentParser, *, with_seed: bool = Tru
         p.add_argument(
             "--seed", type=seed, default=0, help="seed for noise and drop-outs (default: 0)"
         )
+    p.add_argument(
+        "--settings",
+        metavar="FILE.toml",
+        help="tolerances and budgets from a TOML file, one [group] table each (docs/settings.md)",
+    )
+    p.add_argument(
+        "--set",
+        action="append",
+        default=[],
+        metavar="GROUP.FIELD=VALUE",
+        help="change one setting, e.g. explore.completion_touches=40 (repeatable; after --settings)",
+    )
+
+
+def chosen_settings(args: argparse.Namespace) -> Any:
+    """The settings a command runs with: the defaults, then ``--settings FILE``, then each
+    ``--set``; ``None`` when the command has neither option or neither was given."""
+    from tactile_kb import settings
+
+    path, sets = getattr(args, "settings", None), getattr(args, "set", None) or []
+    if path is None and not sets:
+        return None
+    chosen = settings.load(path) if path is not None else settings.DEFAULTS
+    return chosen.assigned(sets) if sets else chosen
 
 
 def seed(text: str) -> int:
