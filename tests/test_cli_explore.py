@@ -258,3 +258,26 @@ def test_bad_settings_on_the_command_line_are_one_line_and_exit_2(
         (line,) = captured.err.splitlines()
         assert line.startswith("tactile-kb classify: error: ")
         assert message in line
+
+
+def test_probe_notes_are_cut_to_a_few_and_counted() -> None:
+    from types import SimpleNamespace
+
+    from tactile_kb.cli.options import PROBE_NOTES_SHOWN, notices
+
+    probes = [f"a probe (the face {k}) found nothing (none)" for k in range(7)]
+    notes = [
+        "blind contact at (0, 0, 0)",
+        *probes[:2],
+        "the way to a probe is blocked",
+        *probes[2:],
+    ]
+    notes.append("12 surface irregularities ridden over")
+    shown = notices(SimpleNamespace(notes=notes))
+    assert shown[:4] == notes[:4]  # the first PROBE_NOTES_SHOWN probe notes, in order
+    assert PROBE_NOTES_SHOWN == 3
+    assert shown[4] == "12 surface irregularities ridden over"
+    assert shown[5].startswith("5 more probe note(s) like these; the record keeps them all")
+    assert len(shown) == 6
+    few = ["a probe (x) found nothing (none)", "other"]
+    assert notices(SimpleNamespace(notes=few)) == few

@@ -249,9 +249,29 @@ def check_noise(noise: float, finger: Any) -> None:
         raise UsageError(f"--noise {noise:g}: {refused}")
 
 
+PROBE_NOTES_SHOWN = 3
+"""At most this many of the completion's probe notes are printed; the rest are counted."""
+
+
 def notices(record: Any) -> list[str]:
-    """What a person should be told about an exploration: its notes."""
-    return list(record.notes)
+    """What a person should be told about an exploration: its notes, with the completion's
+    probe notes (one per probe, dozens on a curved object) cut to :data:`PROBE_NOTES_SHOWN`
+    and a count; the record keeps them all."""
+    out: list[str] = []
+    hidden = 0
+    for note in record.notes:
+        if note.startswith(("a probe ", "the way to a probe ")):
+            shown = sum(n.startswith(("a probe ", "the way to a probe ")) for n in out)
+            if shown >= PROBE_NOTES_SHOWN:
+                hidden += 1
+                continue
+        out.append(note)
+    if hidden:
+        out.append(
+            f"{hidden} more probe note(s) like these; the record keeps them all "
+            "(tactile-kb explore … --out RECORD.json)"
+        )
+    return out
 
 
 PHASE_WORDS = {
