@@ -176,7 +176,8 @@ def load_object(obj: ObjectLike, *, name: str | None = None) -> trimesh.Trimesh:
         point set: no volume or thinner than :data:`MIN_SIZE`), or larger than the workspace.
         The tip's own limit is :func:`check_thickness`.
 
-    Specks are dropped and holes filled (``trimesh.repair.fill_holes``); a mesh trimesh cannot
+    Seams closer than ``objects.weld_fraction`` of the size are welded, specks are dropped and
+    holes filled (``trimesh.repair.fill_holes``); a mesh trimesh cannot
     close is explored as it is. Each such change is listed in ``mesh.metadata[NOTES_KEY]``.
     """
     label = name or object_name(obj)
@@ -196,6 +197,8 @@ def load_object(obj: ObjectLike, *, name: str | None = None) -> trimesh.Trimesh:
         raise ObjectError(f"{label}: the mesh has non-finite (NaN or infinite) vertex coordinates")
     mesh.process()
     notes: list[str] = []
+    if not mesh.is_watertight:
+        mesh = _weld(mesh, notes)
     if int(mesh.body_count) > 1:
         mesh = _keep_largest(mesh, label, notes)
     extent = mesh.extents
@@ -232,6 +235,41 @@ def load_object(obj: ObjectLike, *, name: str | None = None) -> trimesh.Trimesh:
     mesh.metadata["name"] = label
     mesh.metadata[NOTES_KEY] = notes
     return mesh
+
+
+WELD_FRACTION = DEFAULTS.objects.weld_fraction
+"""Vertices closer than this fraction of the object's diagonal are one vertex when a mesh is
+not closed (CAD exports whose seams are a few nanometres apart: robosuite's can)."""
+
+
+def _weld(mesh: trimesh.Trimesh, notes: list[str]) -> trimesh.Trimesh:
+    """``mesh`` with seams closer than ``objects.weld_fraction`` (:data:`WELD_FRACTION`) of
+    its size welded, when that joins bodies or closes it; else ``mesh`` as it is."""
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import connected_components
+    from scipy.spatial import cKDTree
+
+    size = float(np.linalg.norm(mesh.extents))
+    tol = current().objects.weld_fraction * size
+    vertices = np.asarray(mesh.vertices, dtype=float)
+    pairs = cKDTree(vertices).query_pairs(tol, output_type="ndarray")
+    if not size > 0 or len(pairs) == 0:
+        return mesh
+    n = len(vertices)
+    graph = coo_matrix((np.ones(len(pairs)), (pairs[:, 0], pairs[:, 1])), shape=(n, n))
+    count, group = connected_components(graph, directed=False)
+    merged = np.zeros((count, 3))
+    np.add.at(merged, group, vertices)
+    merged /= np.bincount(group, minlength=count)[:, None]  # each cluster at its mean
+    welded = trimesh.Trimesh(merged, group[np.asarray(mesh.faces)], process=False)
+    welded.update_faces(welded.nondegenerate_faces())
+    welded.remove_unreferenced_vertices()
+    welded.process()
+    better = welded.is_watertight or int(welded.body_count) < int(mesh.body_count)
+    if not better or len(welded.faces) < 0.99 * len(mesh.faces):
+        return mesh
+    notes.append(f"seams under {tol * 1e6:.2g} µm apart welded (the mesh was not closed)")
+    return welded
 
 
 def _keep_largest(mesh: trimesh.Trimesh, label: str, notes: list[str]) -> trimesh.Trimesh:

@@ -457,6 +457,13 @@ class ObjectSettings(_Group):
         description="Fraction: a separate body whose bounding-box diagonal is under this fraction "
         "of the largest body's is a floating speck and is dropped.",
     )
+    weld_fraction: float = Field(
+        1e-5,
+        gt=0,
+        lt=0.01,
+        description="Fraction of the object's diagonal: in a mesh that is not closed, vertices "
+        "closer than this are welded when that closes it or joins its bodies (CAD seams).",
+    )
     speck_volume_fraction: float = Field(
         0.01,
         gt=0,

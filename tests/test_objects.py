@@ -279,3 +279,25 @@ def test_the_width_of_a_dense_hull_is_computed_without_a_dense_matrix() -> None:
     assert min_width(sphere) <= 0.08 + 1e-12  # never overestimated
     plate = trimesh.creation.box((0.05, 0.05, 0.004))
     assert min_width(plate) == pytest.approx(0.004)
+
+
+def test_seams_nanometres_apart_are_welded_with_a_note() -> None:
+    # a CAD export whose two halves do not share vertices: 50 nm apart along the seam
+    whole = trimesh.creation.box((0.06, 0.05, 0.04))
+    corners = whole.vertices[whole.faces]  # (12, 3, 3): every triangle its own vertices
+    right = corners.mean(axis=1)[:, 0] > 0.0
+    corners[right] += (5e-8, -3e-8, 2e-8)
+    soup = trimesh.Trimesh(corners.reshape(-1, 3), np.arange(36).reshape(-1, 3))
+    assert not soup.is_watertight  # as trimesh loads it
+    mesh = load_object(soup, name="cad")
+    assert mesh.is_watertight
+    assert mesh.body_count == 1
+    assert mesh.volume == pytest.approx(0.06 * 0.05 * 0.04, rel=1e-5)
+    assert mesh.metadata[NOTES_KEY][0] == (
+        "seams under 0.88 µm apart welded (the mesh was not closed)"
+    )
+    # a real gap (0.1 mm) is not a seam: nothing is welded, and two halves are two bodies
+    corners[right] += (1e-4, 0.0, 0.0)
+    gap = trimesh.Trimesh(corners.reshape(-1, 3), np.arange(36).reshape(-1, 3))
+    with pytest.raises(ObjectError, match="gap: the mesh holds 2 separate bodies"):
+        load_object(gap, name="gap")
