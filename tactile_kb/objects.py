@@ -20,6 +20,7 @@ Examples
 
 from __future__ import annotations
 
+import math
 import warnings
 from pathlib import Path
 from typing import Any
@@ -172,7 +173,7 @@ def load_object(obj: ObjectLike, *, name: str | None = None) -> trimesh.Trimesh:
     ------
     ObjectError
         Unreadable file, empty mesh, non-finite coordinates, more than one object (bodies
-        other than floating specks, :data:`SPECK_FRACTION`), not a solid (a plane, a line, a
+        neither parts of the largest one nor floating specks, :func:`_one_object`), not a solid (a plane, a line, a
         point set: no volume or thinner than :data:`MIN_SIZE`), or larger than the workspace.
         The tip's own limit is :func:`check_thickness`.
 
@@ -199,8 +200,10 @@ def load_object(obj: ObjectLike, *, name: str | None = None) -> trimesh.Trimesh:
     notes: list[str] = []
     if not mesh.is_watertight:
         mesh = _weld(mesh, notes)
+    if not mesh.is_watertight:
+        mesh = _separate_touching(mesh)
     if int(mesh.body_count) > 1:
-        mesh = _keep_largest(mesh, label, notes)
+        mesh = _one_object(mesh, label, notes)
     extent = mesh.extents
     if float(extent.min()) < current().objects.min_size:
         raise ObjectError(
@@ -272,18 +275,61 @@ def _weld(mesh: trimesh.Trimesh, notes: list[str]) -> trimesh.Trimesh:
     return welded
 
 
-def _keep_largest(mesh: trimesh.Trimesh, label: str, notes: list[str]) -> trimesh.Trimesh:
-    """The largest body of ``mesh`` when every other body is a speck: under :data:`SPECK_FRACTION`
-    of its bounding-box diagonal, or under ``objects.speck_volume_fraction`` of its bounding-box
-    volume (a scanner's debris, or islands of surface cut off by holes)."""
-    bodies = list(mesh.split(only_watertight=False))
-    if len(bodies) < 2:
+def _separate_touching(mesh: trimesh.Trimesh) -> trimesh.Trimesh:
+    """``mesh`` with its bodies apart when closed bodies only share vertices or edges (parts
+    modelled overlapping, meeting at a corner): trimesh then sees one open body, whose edges
+    belong to more than two triangles. Faces are grouped through the edges of exactly two
+    triangles; when every group is closed, they are the bodies. Otherwise ``mesh`` as it is."""
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import connected_components
+
+    inverse = np.asarray(mesh.edges_unique_inverse)
+    counts = np.bincount(inverse)
+    if not bool((counts > 2).any()):
         return mesh
+    faces_of_edge = np.arange(len(inverse)) // 3  # edges come three per face, in order
+    order = np.argsort(inverse, kind="stable")
+    manifold = counts[inverse[order]] == 2
+    pairs = faces_of_edge[order][manifold].reshape(-1, 2)
+    n = len(mesh.faces)
+    graph = coo_matrix((np.ones(len(pairs)), (pairs[:, 0], pairs[:, 1])), shape=(n, n))
+    count, group = connected_components(graph, directed=False)
+    if count < 2:
+        return mesh
+    parts = [mesh.submesh([np.flatnonzero(group == k)], append=True) for k in range(count)]
+    if not all(isinstance(p, trimesh.Trimesh) and p.is_watertight for p in parts):
+        return mesh
+    out = trimesh.util.concatenate(parts)
+    assert isinstance(out, trimesh.Trimesh)
+    return out
+
+
+def _one_object(mesh: trimesh.Trimesh, label: str, notes: list[str]) -> trimesh.Trimesh:
+    """The object of a mesh made of several bodies.
+
+    Bodies closer to the largest one (directly or through each other) than
+    ``objects.join_fraction`` of its size are parts of one object — a convex decomposition, a
+    mug and its handle modelled apart, islands of surface between a scan's holes — and stay,
+    closed ones joined by their union (manifold3d). Every other body must be a floating speck
+    (under :data:`SPECK_FRACTION` of the size or ``objects.speck_volume_fraction`` of the
+    bounding volume), and is dropped; a larger one is a second object, refused.
+    """
+    limits = current().objects
+    bodies = list(mesh.split(only_watertight=False))
     sizes = np.array([float(np.linalg.norm(b.extents)) for b in bodies])
     volumes = np.array([float(np.prod(b.extents)) for b in bodies])
     main = int(np.argmax(sizes))
-    others = [k for k in range(len(bodies)) if k != main]
-    limits = current().objects
+    reach = limits.join_fraction * sizes[main]
+    group = [main]
+    grown = True
+    while grown:
+        grown = False
+        for k in np.argsort(-sizes):
+            k = int(k)
+            if k not in group and any(_gap(bodies[k], bodies[g], reach) <= reach for g in group):
+                group.append(k)
+                grown = True
+    others = [k for k in range(len(bodies)) if k not in group]
     large = [
         k
         for k in others
@@ -292,15 +338,52 @@ def _keep_largest(mesh: trimesh.Trimesh, label: str, notes: list[str]) -> trimes
     ]
     if large:
         raise ObjectError(
-            f"{label}: the mesh holds {len(bodies)} separate bodies; explore one object at a time"
+            f"{label}: the mesh holds {1 + len(large)} separate objects (bodies more than "
+            f"{reach * 1000:.2g} mm apart); explore one object at a time"
         )
+    if others:
+        notes.append(
+            f"{len(others)} floating speck(s) dropped (each under {limits.speck_fraction:.0%} "
+            f"of the object's size or {limits.speck_volume_fraction:.0%} of its bounding "
+            "volume)" + ("; the largest body is explored" if len(group) == 1 else "")
+        )
+    if len(group) == 1:
+        kept: trimesh.Trimesh = bodies[main]
+        return kept
+    parts = [bodies[k] for k in group]
+    joined: trimesh.Trimesh | None = None
+    if all(p.is_watertight for p in parts):
+        try:
+            union = trimesh.boolean.union(parts, engine="manifold")
+        except Exception:  # the engine refused the parts: they are kept side by side
+            union = None
+        if isinstance(union, trimesh.Trimesh) and union.is_watertight and len(union.faces):
+            joined = union
+    if joined is None:
+        together = trimesh.util.concatenate(parts)
+        assert isinstance(together, trimesh.Trimesh)
+        joined = together
     notes.append(
-        f"{len(others)} floating speck(s) dropped (each under "
-        f"{limits.speck_fraction:.0%} of the object's size or {limits.speck_volume_fraction:.0%} "
-        "of its bounding volume); the largest body is explored"
+        f"{len(parts)} parts under {reach * 1000:.2g} mm apart explored as one object"
+        + (" (their union)" if joined.is_watertight else "")
     )
-    kept: trimesh.Trimesh = bodies[main]
-    return kept
+    return joined
+
+
+def _gap(a: trimesh.Trimesh, b: trimesh.Trimesh, reach: float) -> float:
+    """The distance between bodies ``a`` and ``b`` (from at most 2000 vertices of each to the
+    other's surface), or infinity when their bounding boxes are further apart than ``reach``."""
+    (alo, ahi), (blo, bhi) = a.bounds, b.bounds
+    if bool(np.any(alo - reach > bhi) or np.any(blo - reach > ahi)):
+        return math.inf
+    best = math.inf
+    for one, other in ((a, b), (b, a)):
+        pts = np.asarray(one.vertices, dtype=float)
+        if len(pts) > 2000:
+            pts = pts[np.linspace(0, len(pts) - 1, 2000).astype(int)]
+        _, dist, _ = trimesh.proximity.closest_point(other, pts)  # type: ignore[no-untyped-call]
+        best = min(best, float(np.min(dist)))
+    return best
 
 
 def _close(mesh: trimesh.Trimesh, notes: list[str]) -> trimesh.Trimesh:

@@ -457,6 +457,14 @@ class ObjectSettings(_Group):
         description="Fraction: a separate body whose bounding-box diagonal is under this fraction "
         "of the largest body's is a floating speck and is dropped.",
     )
+    join_fraction: float = Field(
+        0.02,
+        ge=0,
+        lt=0.5,
+        description="Fraction of the object's diagonal: bodies of a mesh closer than this to "
+        "the largest one are parts of one object (a convex decomposition, a handle modelled "
+        "apart) and are explored together; farther ones must be specks.",
+    )
     weld_fraction: float = Field(
         1e-5,
         gt=0,

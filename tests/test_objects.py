@@ -169,7 +169,8 @@ def test_two_bodies_in_one_file_are_rejected(tmp_path: Path) -> None:
     with pytest.raises(ObjectError) as info:
         load_object(path)
     assert str(info.value) == (
-        f"{path}: the mesh holds 2 separate bodies; explore one object at a time"
+        f"{path}: the mesh holds 2 separate objects (bodies more than 1.7 mm apart); "
+        "explore one object at a time"
     )
     # one body from an STL (unmerged triangle soup in the file) is one body
     one = tmp_path / "one.stl"
@@ -249,7 +250,7 @@ def test_a_second_body_larger_than_a_speck_is_refused() -> None:
     a = trimesh.creation.box((0.06, 0.05, 0.04))
     b = trimesh.creation.box((0.02, 0.02, 0.02))  # 35 % of the box's diagonal, 6.7 % of its volume
     b.apply_translation((0.08, 0.0, 0.0))
-    with pytest.raises(ObjectError, match="holds 2 separate bodies; explore one object at a time"):
+    with pytest.raises(ObjectError, match="holds 2 separate objects"):
         load_object(trimesh.util.concatenate([a, b]), name="two")
 
 
@@ -296,8 +297,38 @@ def test_seams_nanometres_apart_are_welded_with_a_note() -> None:
     assert mesh.metadata[NOTES_KEY][0] == (
         "seams under 0.88 µm apart welded (the mesh was not closed)"
     )
-    # a real gap (0.1 mm) is not a seam: nothing is welded, and two halves are two bodies
+    # a real gap (0.1 mm) is not a seam: nothing is welded; the two open halves, closer than
+    # the finger could pass between, are explored side by side as one object
     corners[right] += (1e-4, 0.0, 0.0)
     gap = trimesh.Trimesh(corners.reshape(-1, 3), np.arange(36).reshape(-1, 3))
-    with pytest.raises(ObjectError, match="gap: the mesh holds 2 separate bodies"):
-        load_object(gap, name="gap")
+    halves = load_object(gap, name="gap")
+    assert not any(n.startswith("seams under") for n in halves.metadata[NOTES_KEY])
+    assert halves.metadata[NOTES_KEY][0].startswith("2 parts under 1.")
+    assert halves.extents[0] == pytest.approx(0.0601, abs=1e-6)
+
+
+def test_parts_of_one_object_are_joined_and_far_bodies_refused() -> None:
+    # an L modelled as two overlapping boxes: their union, one closed body
+    a = trimesh.creation.box((0.08, 0.03, 0.03))
+    b = trimesh.creation.box((0.03, 0.03, 0.06))
+    b.apply_translation((0.025, 0.0, 0.015))
+    l_shape = load_object(trimesh.util.concatenate([a, b]), name="L")
+    assert l_shape.body_count == 1
+    assert l_shape.is_watertight
+    overlap = 0.03 * 0.03 * 0.03  # x 0.01…0.04, y and z ±0.015
+    assert l_shape.volume == pytest.approx(a.volume + b.volume - overlap, rel=1e-6)
+    assert l_shape.metadata[NOTES_KEY] == [
+        "2 parts under 1.8 mm apart explored as one object (their union)"
+    ]
+    # a handle modelled apart, 1 mm off the cup's wall: one object
+    cup = trimesh.creation.cylinder(radius=0.03, height=0.08)
+    handle = trimesh.creation.box((0.01, 0.004, 0.05))
+    handle.apply_translation((0.03 + 0.001 + 0.005, 0.0, 0.0))
+    mug = load_object(trimesh.util.concatenate([cup, handle]), name="mug")
+    assert mug.bounds[1][0] == pytest.approx(0.041, abs=1e-6)  # the handle is kept
+    assert "2 parts under" in mug.metadata[NOTES_KEY][0]
+    # a block 2 cm off the cup is a second object
+    block = trimesh.creation.box((0.03, 0.03, 0.05))
+    block.apply_translation((0.03 + 0.02 + 0.015, 0.0, 0.0))
+    with pytest.raises(ObjectError, match="mug: the mesh holds 2 separate objects"):
+        load_object(trimesh.util.concatenate([cup, block]), name="mug")

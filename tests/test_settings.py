@@ -79,6 +79,7 @@ DOCUMENTED: dict[str, dict[str, float]] = {
         "min_size": 0.002,
         "thin_factor": 1.5,
         "speck_fraction": 0.1,
+        "join_fraction": 0.02,
         "weld_fraction": 1e-5,
         "speck_volume_fraction": 0.01,
         "workspace_half_width": 0.5,
