@@ -30,7 +30,7 @@ The scene mirrors the analytic stepper's world:
   axis (+z in the finger frame) from ``max(ρ − r, 0)`` to ``shaft_length`` above the tip centre,
   as the analytic world's chain of balls. It is a child body of the finger (so the touch sensors,
   which read the contacts of their own body, never feel it) and collides with the object and
-  the table (a slab under z = 0).
+  the table (a block under z = 0).
 
 Examples
 --------
@@ -175,15 +175,17 @@ def scene_xml(
         rgba="0.8 0.8 0.75 1",
     )
     if finger.shaft_radius is not None:
-        # the table as the shaft meets it: a slab under z = 0 (a colliding plane in the world
-        # body makes MuJoCo 4.0 drop the tip's contacts with box geoms)
+        # the table as the shaft meets it: a block under z = 0, deeper than the shaft is long
+        # (MuJoCo 4.0 misses a capsule passing right through a thin box, and a colliding
+        # plane in the world body makes it drop the tip's contacts with box geoms)
+        depth = max(table_size, finger.shaft_length)
         ET.SubElement(
             world,
             "geom",
             name="slab",
             type="box",
-            size=_f((table_size, table_size, 0.01)),
-            pos="0 0 -0.01",
+            size=_f((table_size, table_size, depth)),
+            pos=_f((0.0, 0.0, -depth)),
             contype="0",
             conaffinity="4",  # the shaft's contype: the tip never meets it (workspace floor)
             rgba="0.8 0.8 0.75 0",

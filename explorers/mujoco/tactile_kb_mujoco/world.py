@@ -273,6 +273,9 @@ class MujocoWorld:
             for k, part in enumerate(self.parts)
         }
         self._stats = _Stats()
+        self.reached: FloatArray | None = None
+        """The finger frame (3×3) the head's motors reached in the simulated turn that made
+        this world (:meth:`oriented` with ``at``), before the head locked at its index."""
 
     # counters (shared with the worlds oriented() makes) ----------------------------------
     @property
@@ -348,6 +351,7 @@ class MujocoWorld:
             return out
         p = np.asarray(at, dtype=float)
         reached = out._turn_head(p, self._q_head)
+        out.reached = reached
         error = _turn_between(reached, orientation.rotation)
         if error > 10.0 * HEAD_TOL_RAD:
             raise ExplorationError(
