@@ -133,7 +133,7 @@ def scene_xml(
     options: SceneOptions | None = None,
     start: Sequence[float] = (0.0, 0.0, 0.5),
     table_size: float = 1.0,
-    head: Sequence[float] = (0.0, 0.0),
+    head: Sequence[float] | np.ndarray = (0.0, 0.0),
 ) -> str:
     """The MJCF text of the scene: ``finger`` exploring the object made of ``parts``.
 
