@@ -262,10 +262,12 @@ class MujocoWorld:
         self._tip = int(mujoco.mj_name2id(self.model, mujoco.mjtObj.mjOBJ_GEOM, "tip"))
         self._shaft = int(mujoco.mj_name2id(self.model, mujoco.mjtObj.mjOBJ_GEOM, "shaft"))
         self._body = int(mujoco.mj_name2id(self.model, mujoco.mjtObj.mjOBJ_BODY, "finger"))
-        self._hinges = [
-            int(self.model.jnt_qposadr[mujoco.mj_name2id(self.model, mujoco.mjtObj.mjOBJ_JOINT, j)])
+        joints = [
+            int(mujoco.mj_name2id(self.model, mujoco.mjtObj.mjOBJ_JOINT, j))
             for j in (HEAD_JOINTS if self._head else ())
         ]
+        self._hinges = [int(self.model.jnt_qposadr[j]) for j in joints]
+        self._hinge_dofs = [int(self.model.jnt_dofadr[j]) for j in joints]
         self._margin = float(self.model.geom_margin[self._tip])
         self._dirs = finger.directions_at(orientation)
         self._face_normals = {
@@ -347,6 +349,7 @@ class MujocoWorld:
         out._orientation = orientation
         out._q_head = _angles(orientation)
         out._dirs = self._finger.directions_at(orientation)
+        out.reached = None
         if at is None:
             return out
         p = np.asarray(at, dtype=float)
@@ -505,12 +508,12 @@ class MujocoWorld:
         try:
             for step in range(ramp + 2000):
                 f = min(1.0, (step + 1) / ramp)
-                d.ctrl[3:] = start + f * (goal - start)
+                d.ctrl[3:] = start + f * (goal - start)  # Mturn, Mtilt follow Mx, My, Mz
                 mujoco.mj_step(self.model, d)
                 self._stats.index_steps += 1
                 self._stats.index_time += dt
                 qh = np.asarray(d.qpos[self._hinges], dtype=float)
-                vh = np.asarray(d.qvel[3:5], dtype=float)
+                vh = np.asarray(d.qvel[self._hinge_dofs], dtype=float)
                 if f >= 1.0 and (
                     float(np.abs(qh - goal).max()) < HEAD_TOL_RAD
                     and float(np.abs(vh).max()) < HEAD_TOL_RAD
