@@ -16,8 +16,8 @@ from the code under test: a pose changes where an object lies, not what it is.
 
 ``--explorer mujoco`` runs the same instances (the same seeds draw the same objects, poses and
 turns) in the MuJoCo plugin's world; ``--shaft RADIUS`` gives the 33-sensor finger a colliding
-stem of that radius (metres), in either world. With MuJoCo the last column also counts the
-simulated turns of the head.
+stem of that radius (metres), in either world. With MuJoCo the last column is the share of the
+wall time spent simulating the head's turns.
 """
 
 from __future__ import annotations
@@ -45,10 +45,12 @@ MIN_PROBABILITY = 0.02
 
 
 class _Clock:
-    """Seconds spent in motions, and the share of them with the head indexed."""
+    """Seconds spent in motions, and the share of them with the head indexed; with MuJoCo,
+    seconds spent simulating the head's turns."""
 
     motions = 0.0
     indexed = 0.0
+    turning = 0.0
 
 
 class _TimedWorld(StepperWorld):
@@ -84,6 +86,13 @@ def _mujoco_explorer():  # type: ignore[no-untyped-def]
                 _Clock.motions += dt
                 if not self.orientation.vertical:
                     _Clock.indexed += dt
+
+        def _turn_head(self, p, q_from):  # type: ignore[no-untyped-def]
+            t = time.perf_counter()
+            try:
+                return super()._turn_head(p, q_from)
+            finally:
+                _Clock.turning += time.perf_counter() - t
 
     class TimedMujocoExplorer(MujocoExplorer):
         def make_world(self, mesh, finger, *, seed):  # type: ignore[no-untyped-def]
@@ -161,7 +170,7 @@ def main() -> None:
     wrong: list[str] = []
     print(
         f"{'family':24s} {'mode':6s} {'poses':>5s} {'right':>7s} {'touch/face':>10s} "
-        f"{'s/object':>8s} {'indexed':>7s}"
+        f"{'s/object':>8s} {'indexed':>7s} {'turning':>7s}"
     )
     for fam in families:
         mesh, label, what = fam.build(rng)
@@ -172,7 +181,7 @@ def main() -> None:
             right = runs = 0
             per_face: list[float] = []
             secs: list[float] = []
-            _Clock.motions = _Clock.indexed = 0.0
+            _Clock.motions = _Clock.indexed = _Clock.turning = 0.0
             for k, (posed, p) in enumerate(poses):
                 for _ in range(args.turns):
                     ang = float(rng.uniform(0.0, 360.0))
@@ -205,11 +214,16 @@ def main() -> None:
             totals[noise][0] += right
             totals[noise][1] += runs
             share = _Clock.indexed / _Clock.motions if _Clock.motions else 0.0
+            turning = (
+                f"{_Clock.turning / sum(secs):7.0%}"
+                if args.explorer == "mujoco" and secs
+                else "      -"
+            )
             mode = "exact" if noise == 0 else f"{noise * 1000:g}mm"
             print(
                 f"{fam.name:24s} {mode:6s} {len(poses):5d} {right:3d}/{runs:<3d} "
                 f"{statistics.median(per_face) if per_face else math.nan:10.2f} "
-                f"{statistics.mean(secs) if secs else math.nan:8.2f} {share:7.0%}",
+                f"{statistics.mean(secs) if secs else math.nan:8.2f} {share:7.0%} {turning}",
                 flush=True,
             )
     for noise, (right, runs) in totals.items():
