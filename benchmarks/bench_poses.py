@@ -1,6 +1,7 @@
 """Objects in their stable poses: every family, every resting pose gravity leaves it in.
 
-Run: ``.venv/bin/python benchmarks/bench_poses.py [--turns N] [--family NAME ...] [--seed N]``.
+Run: ``.venv/bin/python benchmarks/bench_poses.py [--turns N] [--family NAME ...] [--seed N]
+[--explorer stepper|mujoco] [--shaft RADIUS]``.
 It never fails; it prints, per family and mode (exact contacts, 0.5 mm noise), the share of
 right answers, the median touches per face, and the wall time per object with the share of
 the motions' time spent with the head indexed away from the vertical; then every wrong case.
@@ -12,6 +13,11 @@ pose of ``trimesh.poses.compute_stable_poses`` with probability ≥ 2 % (a spher
 all less probable: its most probable one, said so in the output), under ``--turns`` random
 turns about z. The true labels come from the construction (bench_accuracy's builders), never
 from the code under test: a pose changes where an object lies, not what it is.
+
+``--explorer mujoco`` runs the same instances (the same seeds draw the same objects, poses and
+turns) in the MuJoCo plugin's world; ``--shaft RADIUS`` gives the 33-sensor finger a colliding
+stem of that radius (metres), in either world. With MuJoCo the last column is the share of the
+wall time spent simulating the head's turns.
 """
 
 from __future__ import annotations
@@ -32,16 +38,19 @@ from bench_accuracy import FAMILIES, NOISE, Family, faces_to_touch
 
 from tactile_kb import solids
 from tactile_kb.pipeline import classify
+from tactile_kb.touch.finger import builtin_finger
 from tactile_kb.touch.stepper import StepperExplorer, StepperWorld
 
 MIN_PROBABILITY = 0.02
 
 
 class _Clock:
-    """Seconds spent in motions, and the share of them with the head indexed."""
+    """Seconds spent in motions, and the share of them with the head indexed; with MuJoCo,
+    seconds spent simulating the head's turns."""
 
     motions = 0.0
     indexed = 0.0
+    turning = 0.0
 
 
 class _TimedWorld(StepperWorld):
@@ -60,6 +69,37 @@ class _TimedExplorer(StepperExplorer):
     def make_world(self, mesh, finger, *, seed):  # type: ignore[no-untyped-def]
         del seed
         return _TimedWorld(mesh, finger)
+
+
+def _mujoco_explorer():  # type: ignore[no-untyped-def]
+    """The MuJoCo explorer, its motions timed as the stepper's (the plugin must be installed)."""
+    from tactile_kb_mujoco.explorer import MujocoExplorer
+    from tactile_kb_mujoco.world import MujocoWorld
+
+    class TimedMujocoWorld(MujocoWorld):
+        def _run(self, kind, p0, u, length, ref, *, press):  # type: ignore[no-untyped-def]
+            t = time.perf_counter()
+            try:
+                return super()._run(kind, p0, u, length, ref, press=press)
+            finally:
+                dt = time.perf_counter() - t
+                _Clock.motions += dt
+                if not self.orientation.vertical:
+                    _Clock.indexed += dt
+
+        def _turn_head(self, p, q_from):  # type: ignore[no-untyped-def]
+            t = time.perf_counter()
+            try:
+                return super()._turn_head(p, q_from)
+            finally:
+                _Clock.turning += time.perf_counter() - t
+
+    class TimedMujocoExplorer(MujocoExplorer):
+        def make_world(self, mesh, finger, *, seed):  # type: ignore[no-untyped-def]
+            del seed
+            return TimedMujocoWorld(mesh, finger)
+
+    return TimedMujocoExplorer()
 
 
 def icosahedron(rng: np.random.Generator) -> tuple[trimesh.Trimesh, str, str]:
@@ -116,7 +156,13 @@ def main() -> None:
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--family", nargs="*", default=None)
     ap.add_argument("--exact-only", action="store_true")
+    ap.add_argument("--explorer", choices=("stepper", "mujoco"), default="stepper")
+    ap.add_argument("--shaft", type=float, default=None, help="stem radius, metres (none)")
     args = ap.parse_args()
+    finger = builtin_finger("33")
+    if args.shaft is not None:
+        finger = finger.model_copy(update={"shaft_radius": args.shaft})
+    print(f"explorer {args.explorer}, finger 33, stem radius {args.shaft or 'none'}")
     rng = np.random.default_rng(args.seed)
     families = [f for f in ALL if not args.family or f.name in args.family]
     modes = [0.0] if args.exact_only else [0.0, NOISE]
@@ -124,7 +170,7 @@ def main() -> None:
     wrong: list[str] = []
     print(
         f"{'family':24s} {'mode':6s} {'poses':>5s} {'right':>7s} {'touch/face':>10s} "
-        f"{'s/object':>8s} {'indexed':>7s}"
+        f"{'s/object':>8s} {'indexed':>7s} {'turning':>7s}"
     )
     for fam in families:
         mesh, label, what = fam.build(rng)
@@ -135,7 +181,7 @@ def main() -> None:
             right = runs = 0
             per_face: list[float] = []
             secs: list[float] = []
-            _Clock.motions = _Clock.indexed = 0.0
+            _Clock.motions = _Clock.indexed = _Clock.turning = 0.0
             for k, (posed, p) in enumerate(poses):
                 for _ in range(args.turns):
                     ang = float(rng.uniform(0.0, 360.0))
@@ -143,7 +189,14 @@ def main() -> None:
                     t = time.perf_counter()
                     try:
                         r = classify(
-                            m, rules=fam.rules, noise=noise, seed=1, explorer=_TimedExplorer()
+                            m,
+                            rules=fam.rules,
+                            noise=noise,
+                            seed=1,
+                            finger=finger,
+                            explorer=_TimedExplorer()
+                            if args.explorer == "stepper"
+                            else _mujoco_explorer(),
                         )
                         got, touches = r.decision.label, r.record.touches
                     except Exception as exc:  # a benchmark reports, it does not stop
@@ -161,11 +214,16 @@ def main() -> None:
             totals[noise][0] += right
             totals[noise][1] += runs
             share = _Clock.indexed / _Clock.motions if _Clock.motions else 0.0
+            turning = (
+                f"{_Clock.turning / sum(secs):7.0%}"
+                if args.explorer == "mujoco" and secs
+                else "      -"
+            )
             mode = "exact" if noise == 0 else f"{noise * 1000:g}mm"
             print(
                 f"{fam.name:24s} {mode:6s} {len(poses):5d} {right:3d}/{runs:<3d} "
                 f"{statistics.median(per_face) if per_face else math.nan:10.2f} "
-                f"{statistics.mean(secs) if secs else math.nan:8.2f} {share:7.0%}",
+                f"{statistics.mean(secs) if secs else math.nan:8.2f} {share:7.0%} {turning}",
                 flush=True,
             )
     for noise, (right, runs) in totals.items():

@@ -27,6 +27,7 @@ from tactile_kb.errors import TactileKBError
 from tactile_kb.geometry.model import ObjectModel, build_model
 from tactile_kb.record import ExplorationRecord
 from tactile_kb.touch.explorers import Explorer, get_explorer
+from tactile_kb.touch.finger import Finger
 
 __all__ = [
     "ExplorerRun",
@@ -144,7 +145,7 @@ def compare_object(
     name: str,
     mesh: trimesh.Trimesh,
     *,
-    finger: str = "33",
+    finger: Finger | str = "33",
     seed: int = 0,
     explorers: Sequence[str | Explorer] = ("stepper", "mujoco"),
     rules: str = "parallelepipeds",
@@ -177,7 +178,7 @@ def compare_object(
     first, second = runs
     return SideBySide(
         name=name,
-        finger=finger,
+        finger=finger if isinstance(finger, str) else finger.name,
         runs=(first, second),
         agreement=match_planes(first.model, second.model),
     )

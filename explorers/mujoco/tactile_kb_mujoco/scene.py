@@ -19,7 +19,18 @@ The scene mirrors the analytic stepper's world:
   only, and with friction MuJoCo's pyramidal cones kick a tip that slides pressed on a face
   off it;
 * the **table** is the plane z = 0, drawn but not colliding with the tip: the workspace
-  floor keeps the tip above it, as in the analytic world.
+  floor keeps the tip above it, as in the analytic world;
+* a finger with an indexing head (``finger.wrist``) gets two **hinge joints** after the slides,
+  both through the tip centre: ``turn`` about +z, then ``tilt`` about the turned +y. MuJoCo
+  composes a body's joints in their order, so the finger frame is ``Rz(turn) · Ry(tilt)``:
+  :attr:`tactile_kb.touch.finger.Orientation.rotation` (tilted by θ, then turned about the
+  vertical). Each hinge has a position actuator (``Mturn``, ``Mtilt``). The sites are placed in
+  the finger frame, so the sensors turn with the head;
+* a finger with a ``shaft_radius`` gets a **shaft**: a capsule of that radius on the finger's
+  axis (+z in the finger frame) from ``max(ρ − r, 0)`` to ``shaft_length`` above the tip centre,
+  as the analytic world's chain of balls. It is a child body of the finger (so the touch sensors,
+  which read the contacts of their own body, never feel it) and collides with the object and
+  the table (a block under z = 0).
 
 Examples
 --------
@@ -44,7 +55,10 @@ from tactile_kb.settings import current
 from tactile_kb.touch.finger import Finger
 from tactile_kb_mujoco.parts import ConvexPart
 
-__all__ = ["SceneOptions", "scene_xml", "site_radius"]
+__all__ = ["HEAD_JOINTS", "SceneOptions", "scene_xml", "site_radius"]
+
+HEAD_JOINTS = ("turn", "tilt")
+"""The head's hinge joints in chain order (after the slides ``x``, ``y``, ``z``)."""
 
 
 @dataclass(frozen=True)
@@ -64,12 +78,23 @@ class SceneOptions:
         Contact margin of the tip, metres: the tip is in contact (and pressed) within
         ρ + margin of the object; by default the settings' ``world.contact_tol`` when the
         options are made.
+    head_inertia
+        Rotor inertia (``armature``) of each head hinge, kg·m²; it dominates the tip's and the
+        shaft's own inertia, so the head's loop behaves the same in every pose.
+    head_omega
+        Natural frequency of each head motor's position loop, rad/s (``kp = I·ω²``, critical
+        damping ``kv = 2·I·ω``).
+    shaft_mass
+        Mass of the shaft, kg (its weight is compensated).
     """
 
     timestep: float = 0.001
     finger_mass: float = 0.05
     omega: float = 150.0
     margin: float = field(default_factory=lambda: current().world.contact_tol)
+    head_inertia: float = 0.01
+    head_omega: float = 60.0
+    shaft_mass: float = 0.01
 
     @property
     def kp(self) -> float:
@@ -80,6 +105,16 @@ class SceneOptions:
     def kv(self) -> float:
         """Velocity gain of each motor, N·s/m (critical damping)."""
         return 2.0 * self.finger_mass * self.omega
+
+    @property
+    def head_kp(self) -> float:
+        """Position gain of each head motor, N·m/rad."""
+        return self.head_inertia * self.head_omega**2
+
+    @property
+    def head_kv(self) -> float:
+        """Velocity gain of each head motor, N·m·s/rad (critical damping)."""
+        return 2.0 * self.head_inertia * self.head_omega
 
 
 def site_radius(finger: Finger) -> float:
@@ -98,6 +133,7 @@ def scene_xml(
     options: SceneOptions | None = None,
     start: Sequence[float] = (0.0, 0.0, 0.5),
     table_size: float = 1.0,
+    head: Sequence[float] | np.ndarray = (0.0, 0.0),
 ) -> str:
     """The MJCF text of the scene: ``finger`` exploring the object made of ``parts``.
 
@@ -111,6 +147,8 @@ def scene_xml(
         Physical parameters (:class:`SceneOptions`).
     start
         Initial tip-centre position (the joints' zero is the world origin).
+    head
+        Initial head angles ``(turn, tilt)``, radians (used when the finger has a wrist).
     table_size
         Half-size of the drawn table plane, metres.
     """
@@ -136,6 +174,22 @@ def scene_xml(
         conaffinity="0",
         rgba="0.8 0.8 0.75 1",
     )
+    if finger.shaft_radius is not None:
+        # the table as the shaft meets it: a block under z = 0, deeper than the shaft is long
+        # (MuJoCo 4.0 misses a capsule passing right through a thin box, and a colliding
+        # plane in the world body makes it drop the tip's contacts with box geoms)
+        depth = max(table_size, finger.shaft_length)
+        ET.SubElement(
+            world,
+            "geom",
+            name="slab",
+            type="box",
+            size=_f((table_size, table_size, depth)),
+            pos=_f((0.0, 0.0, -depth)),
+            contype="0",
+            conaffinity="4",  # the shaft's contype: the tip never meets it (workspace floor)
+            rgba="0.8 0.8 0.75 0",
+        )
     for k, part in enumerate(parts):
         attrs = {
             "name": f"part{k}",
@@ -158,6 +212,19 @@ def scene_xml(
     body = ET.SubElement(world, "body", name="finger", gravcomp="1")
     for axis, vec in (("x", "1 0 0"), ("y", "0 1 0"), ("z", "0 0 1")):
         ET.SubElement(body, "joint", name=axis, type="slide", axis=vec, ref="0")
+    wrist = finger.wrist is not None
+    if wrist:  # after the slides, through the tip centre: the frame is Rz(turn) · Ry(tilt)
+        for name, vec in zip(HEAD_JOINTS, ("0 0 1", "0 1 0"), strict=True):
+            ET.SubElement(
+                body,
+                "joint",
+                name=name,
+                type="hinge",
+                axis=vec,
+                pos="0 0 0",
+                ref="0",
+                armature=repr(opt.head_inertia),
+            )
     ET.SubElement(
         body,
         "geom",
@@ -182,6 +249,23 @@ def scene_xml(
             pos=_f(np.asarray(d) * finger.radius),
             rgba="1 0 0 0.3",
         )
+    if finger.shaft_radius is not None:
+        rs = float(finger.shaft_radius)
+        shaft = ET.SubElement(body, "body", name="shaft", gravcomp="1")
+        ET.SubElement(
+            shaft,
+            "geom",
+            name="shaft",
+            type="capsule",
+            size=repr(rs),
+            fromto=_f((0.0, 0.0, max(finger.radius - rs, 0.0), 0.0, 0.0, finger.shaft_length)),
+            mass=repr(opt.shaft_mass),
+            condim="1",
+            margin="0",
+            contype="4",  # the table's conaffinity
+            conaffinity="2",  # the object's contype
+            rgba="0.5 0.5 0.5 1",
+        )
     actuators = ET.SubElement(root, "actuator")
     for axis in ("x", "y", "z"):
         ET.SubElement(
@@ -192,10 +276,21 @@ def scene_xml(
             kp=repr(opt.kp),
             kv=repr(opt.kv),
         )
+    if wrist:
+        for name in HEAD_JOINTS:
+            ET.SubElement(
+                actuators,
+                "position",
+                name=f"M{name}",
+                joint=name,
+                kp=repr(opt.head_kp),
+                kv=repr(opt.head_kv),
+            )
     sensors = ET.SubElement(root, "sensor")
     for i in range(len(finger.directions)):
         ET.SubElement(sensors, "touch", name=f"t{i}", site=f"s{i}")
     keyframe = ET.SubElement(root, "keyframe")
-    ET.SubElement(keyframe, "key", name="start", qpos=_f(start), ctrl=_f(start))
+    q0 = [*start, *head] if wrist else list(start)
+    ET.SubElement(keyframe, "key", name="start", qpos=_f(q0), ctrl=_f(q0))
     ET.indent(root)
     return ET.tostring(root, encoding="unicode")

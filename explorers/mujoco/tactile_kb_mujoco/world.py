@@ -21,6 +21,19 @@ on it with a small force while it slides. The commanded line runs just inside th
 (``depth`` below ρ + margin), parallel to the surface's plane; that is where probes are taken,
 as the analytic world keeps the tip at distance ρ.
 
+With an indexing head (``finger.wrist``), the world's value includes the head's pose
+(:class:`~tactile_kb.touch.world.OrientableWorld`): :meth:`MujocoWorld.oriented` returns the
+same world (the same simulation) with the head turned. The turn is simulated: with the tip
+held where the head turns, the two hinge motors' set-points ramp to the new angles and the
+simulation steps (contacts off: the turn is checked at its end, as in the analytic world)
+until the head settles; the head then locks at its index (an indexing head's detent), and the
+finger frame reached in the simulation must be the pose's rotation. A pose whose shaft enters
+the object or the table there is refused with a one-line
+:class:`~tactile_kb.errors.ExplorationError`. During motions the head's motors hold the pose,
+and a motion the shaft would make enter the object or the table stops ``"blocked"``: the
+shaft's contacts count as penetrations, and the touch sensors never feel them (they read the
+contacts of the tip's own body).
+
 Contacts are read from MuJoCo's contact list: the tip is *in contact* with a surface when its
 distance is below the tip's margin (:class:`~tactile_kb_mujoco.scene.SceneOptions`), which is
 :data:`tactile_kb.touch.world.CONTACT_TOL`. A motion is *blocked* where the tip would penetrate
@@ -39,6 +52,7 @@ Examples
 
 from __future__ import annotations
 
+import copy
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -49,9 +63,9 @@ import numpy as np
 import trimesh
 from numpy.typing import NDArray
 
-from tactile_kb.errors import ObjectError, UsageError
+from tactile_kb.errors import ExplorationError, ObjectError, UsageError
 from tactile_kb.settings import current
-from tactile_kb.touch.finger import Finger
+from tactile_kb.touch.finger import VERTICAL, Finger, Orientation
 from tactile_kb.touch.world import (
     Box,
     Event,
@@ -62,7 +76,7 @@ from tactile_kb.touch.world import (
     default_workspace,
 )
 from tactile_kb_mujoco.parts import CONCAVITY_RHO, MAX_HULL_VERTICES, ConvexPart, convex_parts
-from tactile_kb_mujoco.scene import SceneOptions, scene_xml
+from tactile_kb_mujoco.scene import HEAD_JOINTS, SceneOptions, scene_xml
 
 __all__ = ["MujocoWorld"]
 
@@ -81,7 +95,37 @@ class _Contact:
 @dataclass(frozen=True)
 class _Probe:
     fired: tuple[int, ...]
-    penetration: float  # deepest penetration of the tip into the object (≤ 0: none), metres
+    penetration: float  # deepest penetration of the tip or shaft into anything (≤ 0: none), m
+
+
+@dataclass
+class _Stats:
+    """Counters shared by a world and the worlds :meth:`MujocoWorld.oriented` makes of it."""
+
+    steps: int = 0
+    probes: int = 0
+    sim_time: float = 0.0
+    physical_events: int = 0
+    index_steps: int = 0
+    index_time: float = 0.0
+    indexes: int = 0
+
+
+HEAD_TOL_RAD = 1e-4
+"""Radians: a simulated turn of the head has settled when both hinges are this close to their
+set-points (and slower than this per second); the frame then reached must match the pose's
+rotation to this angle."""
+
+
+def _angles(orientation: Orientation) -> FloatArray:
+    """The head's hinge angles ``(turn, tilt)``, radians, for ``orientation``."""
+    return np.radians([orientation.turn_deg, orientation.tilt_deg]).astype(float)
+
+
+def _turn_between(rot_a: FloatArray, rot_b: FloatArray) -> float:
+    """The angle of the rotation taking ``rot_a`` to ``rot_b``, radians."""
+    c = (float(np.trace(rot_a.T @ rot_b)) - 1.0) / 2.0
+    return math.acos(max(-1.0, min(1.0, c)))
 
 
 def _normals(part: ConvexPart) -> FloatArray:
@@ -140,6 +184,11 @@ class MujocoWorld:
         tip reaches no deeper than this under the hull beyond the surface's roughness
         (:func:`~tactile_kb_mujoco.parts.convex_parts`), metres; default
         :data:`~tactile_kb_mujoco.parts.CONCAVITY_RHO` tip radii; 0 always decomposes it.
+    orientation
+        The head's pose (:class:`~tactile_kb.touch.finger.Orientation`); only the vertical for a
+        finger without a wrist. :meth:`oriented` gives the same world with the head turned.
+    head_speed
+        How fast the head's motors turn it when it indexes, rad/s.
     """
 
     def __init__(
@@ -161,10 +210,18 @@ class MujocoWorld:
         parts: Sequence[ConvexPart] | None = None,
         max_hull_vertices: int = MAX_HULL_VERTICES,
         concavity_tol: float | None = None,
+        orientation: Orientation = VERTICAL,
+        head_speed: float = 2.0 * math.pi,
     ) -> None:
-        if speed <= 0 or press < 0 or resolution <= 0:
-            raise UsageError("press must be ≥ 0, speed and resolution > 0")
+        if speed <= 0 or press < 0 or resolution <= 0 or head_speed <= 0:
+            raise UsageError("press must be ≥ 0, speed, head_speed and resolution > 0")
+        self._head = finger.wrist is not None
+        if not self._head and orientation != VERTICAL:
+            raise UsageError(f"finger {finger.name!r} has no wrist: its head stays vertical")
         self._finger = finger
+        self._orientation = orientation
+        self._q_head = _angles(orientation) if self._head else np.zeros(0)
+        self.head_speed = float(head_speed)
         self.name = name
         self.speed = float(speed)
         self.press = float(press)
@@ -191,7 +248,9 @@ class MujocoWorld:
         self._workspace = workspace or default_workspace(b, finger.radius)
         self._hint = Box(lo=_vec(b[0] - hint_margin), hi=_vec(b[1] + hint_margin))
         start = self._workspace.hi
-        self.xml = scene_xml(finger, self.parts, options=self.options, start=start)
+        self.xml = scene_xml(
+            finger, self.parts, options=self.options, start=start, head=self._q_head
+        )
         try:
             self.model: Any = mujoco.MjModel.from_xml_string(self.xml)
         except ValueError as exc:
@@ -201,20 +260,55 @@ class MujocoWorld:
         self._probe_data: Any = mujoco.MjData(self.model)
         mujoco.mj_resetDataKeyframe(self.model, self.data, 0)
         self._tip = int(mujoco.mj_name2id(self.model, mujoco.mjtObj.mjOBJ_GEOM, "tip"))
+        self._shaft = int(mujoco.mj_name2id(self.model, mujoco.mjtObj.mjOBJ_GEOM, "shaft"))
+        self._body = int(mujoco.mj_name2id(self.model, mujoco.mjtObj.mjOBJ_BODY, "finger"))
+        joints = [
+            int(mujoco.mj_name2id(self.model, mujoco.mjtObj.mjOBJ_JOINT, j))
+            for j in (HEAD_JOINTS if self._head else ())
+        ]
+        self._hinges = [int(self.model.jnt_qposadr[j]) for j in joints]
+        self._hinge_dofs = [int(self.model.jnt_dofadr[j]) for j in joints]
         self._margin = float(self.model.geom_margin[self._tip])
-        self._dirs = finger.matrix
+        self._dirs = finger.directions_at(orientation)
         self._face_normals = {
             int(mujoco.mj_name2id(self.model, mujoco.mjtObj.mjOBJ_GEOM, f"part{k}")): _normals(part)
             for k, part in enumerate(self.parts)
         }
-        self.steps = 0
-        """Physics steps taken so far."""
-        self.probes = 0
+        self._stats = _Stats()
+        self.reached: FloatArray | None = None
+        """The finger frame (3×3) the head's motors reached in the simulated turn that made
+        this world (:meth:`oriented` with ``at``), before the head locked at its index."""
+
+    # counters (shared with the worlds oriented() makes) ----------------------------------
+    @property
+    def steps(self) -> int:
+        """Physics steps taken so far in motions."""
+        return self._stats.steps
+
+    @property
+    def probes(self) -> int:
         """Probes (``mj_forward`` at a placed position) taken so far."""
-        self.sim_time = 0.0
+        return self._stats.probes
+
+    @property
+    def sim_time(self) -> float:
         """Simulated seconds of motion so far."""
-        self.physical_events = 0
+        return self._stats.sim_time
+
+    @property
+    def physical_events(self) -> int:
         """Steps at which the moving finger's own sensors differed from the motion's start."""
+        return self._stats.physical_events
+
+    @property
+    def indexes(self) -> int:
+        """How many times the head was turned (simulated) so far."""
+        return self._stats.indexes
+
+    @property
+    def index_time(self) -> float:
+        """Simulated seconds spent turning the head so far."""
+        return self._stats.index_time
 
     # World protocol -----------------------------------------------------------------------
     @property
@@ -231,6 +325,59 @@ class MujocoWorld:
     def hint(self) -> Box:
         """A rough box around the object."""
         return self._hint
+
+    @property
+    def orientation(self) -> Orientation:
+        """The head's pose."""
+        return self._orientation
+
+    def oriented(self, orientation: Orientation, at: Vec3 | None = None) -> MujocoWorld:
+        """This world (the same simulation) with the head indexed to ``orientation``.
+
+        With ``at`` (the tip centre where the head turns), the turn is simulated there by the
+        head's motors, and a pose whose shaft enters the object or the table there raises
+        :class:`~tactile_kb.errors.ExplorationError` (one line).
+        """
+        if not self._head:
+            if orientation == VERTICAL:
+                return self
+            raise ExplorationError(
+                f"finger {self._finger.name!r} has no wrist: its head cannot index to tilt "
+                f"{orientation.tilt_deg:g}°, turn {orientation.turn_deg:g}°"
+            )
+        out = copy.copy(self)
+        out._orientation = orientation
+        out._q_head = _angles(orientation)
+        out._dirs = self._finger.directions_at(orientation)
+        out.reached = None
+        if at is None:
+            return out
+        p = np.asarray(at, dtype=float)
+        reached = out._turn_head(p, self._q_head)
+        out.reached = reached
+        error = _turn_between(reached, orientation.rotation)
+        if error > 10.0 * HEAD_TOL_RAD:
+            raise ExplorationError(
+                f"the head settled {math.degrees(error):.3g}° away from tilt "
+                f"{orientation.tilt_deg:g}°, turn {orientation.turn_deg:g}°"
+            )
+        if out._shaft_penetration(p) > current().world.block_tol:
+            raise ExplorationError(
+                f"the head at tilt {orientation.tilt_deg:g}°, turn {orientation.turn_deg:g}° "
+                f"collides with the object or the table at {tuple(round(c, 4) for c in at)}: "
+                "index the head elsewhere"
+            )
+        return out
+
+    def head_rotation(self) -> FloatArray:
+        """The finger frame's rotation in the simulation where the finger was last placed
+        (the head's pose as MuJoCo has it), 3×3."""
+        out: FloatArray = np.asarray(self.data.xmat[self._body], dtype=float).reshape(3, 3).copy()
+        return out
+
+    def shaft_collides(self, centre: Vec3) -> bool:
+        """Whether the shaft enters the object or the table with the tip centre at ``centre``."""
+        return self._shaft_penetration(np.asarray(centre, dtype=float)) > current().world.block_tol
 
     def sense(self, centre: Vec3) -> tuple[int, ...]:
         """Sensors ON with the tip centre placed at ``centre``."""
@@ -291,7 +438,7 @@ class MujocoWorld:
 
     def _read(self, data: Any) -> _Probe:
         fired = tuple(np.flatnonzero(data.sensordata > self.threshold).tolist())
-        # Only the tip collides (the object's parts are all fixed to the world).
+        # Only the tip and the shaft collide (the object's parts are all fixed to the world).
         depth = -float(data.contact.dist.min()) if data.ncon else -math.inf
         return _Probe(fired=fired, penetration=depth)
 
@@ -312,14 +459,74 @@ class MujocoWorld:
             contacts.append(_Contact(geom=other, dist=float(c.dist), normal=n))
         return contacts
 
+    def _q(self, p: FloatArray) -> FloatArray:
+        """The joint vector with the tip centre at ``p`` and the head at its pose."""
+        return np.concatenate([p, self._q_head]) if self._head else p
+
     def _probe(self, p: FloatArray) -> _Probe:
         d = self._probe_data
-        d.qpos[:] = p
+        q = self._q(p)
+        d.qpos[:] = q
         d.qvel[:] = 0.0
-        d.ctrl[:] = p
+        d.ctrl[:] = q
         mujoco.mj_forward(self.model, d)
-        self.probes += 1
+        self._stats.probes += 1
         return self._read(d)
+
+    def _shaft_penetration(self, p: FloatArray) -> float:
+        """How deep the shaft is in the object or the table with the tip centre at ``p``
+        (≤ 0 or ``-inf``: not at all), metres."""
+        if self._shaft < 0:
+            return -math.inf
+        self._probe(p)
+        d = self._probe_data
+        depth = -math.inf
+        for k in range(int(d.ncon)):
+            c = d.contact[k]
+            if self._shaft in (int(c.geom1), int(c.geom2)):
+                depth = max(depth, -float(c.dist))
+        return depth
+
+    def _turn_head(self, p: FloatArray, q_from: FloatArray) -> FloatArray:
+        """Simulate the head's motors turning it from angles ``q_from`` to this world's pose,
+        the tip held at ``p`` and contacts off; the finger frame reached, 3×3."""
+        goal = self._q_head.copy()
+        start = q_from.copy()
+        # the turn goes the short way round (the hinge is unlimited)
+        goal[0] = start[0] + math.remainder(float(goal[0] - start[0]), 2.0 * math.pi)
+        d = self.data
+        q = np.concatenate([p, start])
+        d.qpos[:] = q
+        d.qvel[:] = 0.0
+        d.qacc_warmstart[:] = 0.0
+        d.ctrl[:] = q
+        dt = float(self.model.opt.timestep)
+        span = float(np.abs(goal - start).max())
+        ramp = max(1, math.ceil(span / (self.head_speed * dt)))
+        flags = int(self.model.opt.disableflags)
+        self.model.opt.disableflags = flags | int(mujoco.mjtDisableBit.mjDSBL_CONTACT)
+        try:
+            for step in range(ramp + 2000):
+                f = min(1.0, (step + 1) / ramp)
+                d.ctrl[3:] = start + f * (goal - start)  # Mturn, Mtilt follow Mx, My, Mz
+                mujoco.mj_step(self.model, d)
+                self._stats.index_steps += 1
+                self._stats.index_time += dt
+                qh = np.asarray(d.qpos[self._hinges], dtype=float)
+                vh = np.asarray(d.qvel[self._hinge_dofs], dtype=float)
+                if f >= 1.0 and (
+                    float(np.abs(qh - goal).max()) < HEAD_TOL_RAD
+                    and float(np.abs(vh).max()) < HEAD_TOL_RAD
+                ):
+                    break
+            mujoco.mj_kinematics(self.model, d)
+        finally:
+            self.model.opt.disableflags = flags
+        self._stats.indexes += 1
+        reached = self.head_rotation()
+        self._place(p)  # the head locks at its index
+        mujoco.mj_kinematics(self.model, d)
+        return reached
 
     def _surface_of(self, sensor: int) -> _Contact | None:
         """The contact (at the last probe) whose direction lies in ``sensor``'s cone."""
@@ -361,10 +568,11 @@ class MujocoWorld:
 
     def _place(self, p: FloatArray) -> None:
         d = self.data
-        d.qpos[:] = p
+        q = self._q(p)
+        d.qpos[:] = q
         d.qvel[:] = 0.0
         d.qacc_warmstart[:] = 0.0
-        d.ctrl[:] = p
+        d.ctrl[:] = q
 
     def _run(
         self,
@@ -395,16 +603,16 @@ class MujocoWorld:
             if travel - samples[-1] <= self.settle:
                 break
             s_cmd = min(travel, s_cmd + ds)
-            d.ctrl[:] = p0 + min(s_cmd + lag, travel) * u + press
+            d.ctrl[:3] = p0 + min(s_cmd + lag, travel) * u + press
             mujoco.mj_step(self.model, d)
-            self.steps += 1
-            self.sim_time += dt
+            self._stats.steps += 1
+            self._stats.sim_time += dt
             # After mj_step, sensordata and contacts describe the state before the step: the
             # sensors as the moving finger feels them at samples[-1].
             felt = self._read(d)
-            samples.append(min(travel, max(samples[-1], float((np.asarray(d.qpos) - p0) @ u))))
+            samples.append(min(travel, max(samples[-1], float((np.asarray(d.qpos[:3]) - p0) @ u))))
             if self._event(ref, felt, physical=True):
-                self.physical_events += 1
+                self._stats.physical_events += 1
                 check = len(samples) - 2  # the finger felt a change: confirm on the line
             elif d.ncon or (step + 1) % self.check_every == 0:
                 check = len(samples) - 1  # touching something, or a routine check

@@ -27,11 +27,16 @@ def test_model_mirrors_the_finger(layout):
     n = len(finger.directions)
     assert model.nsensor == n
     assert all(model.sensor_type[i] == mujoco.mjtSensor.mjSENS_TOUCH for i in range(n))
-    assert model.njnt == 3
+    head = finger.wrist is not None  # "33" indexes, "4" stays vertical
+    assert model.njnt == (5 if head else 3)
     assert all(model.jnt_type[i] == mujoco.mjtJoint.mjJNT_SLIDE for i in range(3))
-    np.testing.assert_array_equal(model.jnt_axis, np.eye(3))
+    np.testing.assert_array_equal(model.jnt_axis[:3], np.eye(3))
     names = [mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_ACTUATOR, i) for i in range(model.nu)]
-    assert names == ["Mx", "My", "Mz"]
+    assert names == ["Mx", "My", "Mz", *(["Mturn", "Mtilt"] if head else [])]
+    if head:  # turn about z, then tilt about the turned y, both through the tip centre
+        assert all(model.jnt_type[i] == mujoco.mjtJoint.mjJNT_HINGE for i in (3, 4))
+        np.testing.assert_array_equal(model.jnt_axis[3:], [[0, 0, 1], [0, 1, 0]])
+        np.testing.assert_array_equal(model.jnt_pos[3:], np.zeros((2, 3)))
     tip = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_GEOM, "tip")
     assert model.geom_type[tip] == mujoco.mjtGeom.mjGEOM_SPHERE
     assert model.geom_size[tip][0] == pytest.approx(finger.radius)
