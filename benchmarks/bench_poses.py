@@ -1,7 +1,7 @@
 """Objects in their stable poses: every family, every resting pose gravity leaves it in.
 
 Run: ``.venv/bin/python benchmarks/bench_poses.py [--turns N] [--family NAME ...] [--seed N]
-[--explorer stepper|mujoco] [--shaft RADIUS]``.
+[--explorer stepper|mujoco] [--shaft RADIUS] [--workers N]``.
 It never fails; it prints, per family and mode (exact contacts, 0.5 mm noise), the share of
 right answers, the median touches per face, and the wall time per object with the share of
 the motions' time spent with the head indexed away from the vertical; then every wrong case.
@@ -150,6 +150,37 @@ def stable_poses(mesh: trimesh.Trimesh) -> list[tuple[trimesh.Trimesh, float]]:
     return out
 
 
+def _job(job: dict) -> dict:  # type: ignore[type-arg]
+    """Classify one posed object (in a worker process with ``--workers``); its outcome."""
+    finger = builtin_finger("33")
+    if job["shaft"] is not None:
+        finger = finger.model_copy(update={"shaft_radius": job["shaft"]})
+    _Clock.motions = _Clock.indexed = _Clock.turning = 0.0
+    m = job["mesh"]
+    t = time.perf_counter()
+    try:
+        r = classify(
+            m,
+            rules=job["rules"],
+            noise=job["noise"],
+            seed=1,
+            finger=finger,
+            explorer=_TimedExplorer() if job["explorer"] == "stepper" else _mujoco_explorer(),
+        )
+        got, touches = r.decision.label, r.record.touches
+    except Exception as exc:  # a benchmark reports, it does not stop
+        got, touches = f"error: {type(exc).__name__}: {exc}"[:160], 0
+    return {
+        "got": got,
+        "touches": touches,
+        "seconds": time.perf_counter() - t,
+        "faces": faces_to_touch(m),
+        "motions": _Clock.motions,
+        "indexed": _Clock.indexed,
+        "turning": _Clock.turning,
+    }
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--turns", type=int, default=3)
@@ -158,74 +189,81 @@ def main() -> None:
     ap.add_argument("--exact-only", action="store_true")
     ap.add_argument("--explorer", choices=("stepper", "mujoco"), default="stepper")
     ap.add_argument("--shaft", type=float, default=None, help="stem radius, metres (none)")
+    ap.add_argument(
+        "--workers", type=int, default=1, help="processes (the same instances, in parallel)"
+    )
     args = ap.parse_args()
-    finger = builtin_finger("33")
-    if args.shaft is not None:
-        finger = finger.model_copy(update={"shaft_radius": args.shaft})
     print(f"explorer {args.explorer}, finger 33, stem radius {args.shaft or 'none'}")
     rng = np.random.default_rng(args.seed)
     families = [f for f in ALL if not args.family or f.name in args.family]
     modes = [0.0] if args.exact_only else [0.0, NOISE]
-    totals = {m: [0, 0] for m in modes}
-    wrong: list[str] = []
-    print(
-        f"{'family':24s} {'mode':6s} {'poses':>5s} {'right':>7s} {'touch/face':>10s} "
-        f"{'s/object':>8s} {'indexed':>7s} {'turning':>7s}"
-    )
+    # every instance, pose and turn is drawn first, in one order, so that --workers changes
+    # only where they run
+    groups: list[tuple[Family, float, int, list[dict]]] = []  # type: ignore[type-arg]
     for fam in families:
         mesh, label, what = fam.build(rng)
         poses = stable_poses(mesh)
         if poses and max(p for _, p in poses) < MIN_PROBABILITY:
             print(f"  ({fam.name}: no pose reaches {MIN_PROBABILITY:.0%}; its most probable one)")
         for noise in modes:
-            right = runs = 0
-            per_face: list[float] = []
-            secs: list[float] = []
-            _Clock.motions = _Clock.indexed = _Clock.turning = 0.0
+            jobs = []
             for k, (posed, p) in enumerate(poses):
                 for _ in range(args.turns):
                     ang = float(rng.uniform(0.0, 360.0))
-                    m = solids.rotate_about_z(posed, ang)
-                    t = time.perf_counter()
-                    try:
-                        r = classify(
-                            m,
-                            rules=fam.rules,
-                            noise=noise,
-                            seed=1,
-                            finger=finger,
-                            explorer=_TimedExplorer()
-                            if args.explorer == "stepper"
-                            else _mujoco_explorer(),
-                        )
-                        got, touches = r.decision.label, r.record.touches
-                    except Exception as exc:  # a benchmark reports, it does not stop
-                        got, touches = f"error: {type(exc).__name__}: {exc}"[:160], 0
-                    secs.append(time.perf_counter() - t)
-                    runs += 1
-                    per_face.append(touches / max(1, faces_to_touch(m)))
-                    if got == label:
-                        right += 1
-                    else:
-                        wrong.append(
-                            f"{fam.name} pose {k} (p={p:.2f}) turned {ang:.0f}° "
-                            f"noise {noise * 1000:g} mm: {got} (want {label}); {what}"
-                        )
-            totals[noise][0] += right
-            totals[noise][1] += runs
-            share = _Clock.indexed / _Clock.motions if _Clock.motions else 0.0
-            turning = (
-                f"{_Clock.turning / sum(secs):7.0%}"
-                if args.explorer == "mujoco" and secs
-                else "      -"
-            )
-            mode = "exact" if noise == 0 else f"{noise * 1000:g}mm"
-            print(
-                f"{fam.name:24s} {mode:6s} {len(poses):5d} {right:3d}/{runs:<3d} "
-                f"{statistics.median(per_face) if per_face else math.nan:10.2f} "
-                f"{statistics.mean(secs) if secs else math.nan:8.2f} {share:7.0%} {turning}",
-                flush=True,
-            )
+                    jobs.append(
+                        {
+                            "mesh": solids.rotate_about_z(posed, ang),
+                            "rules": fam.rules,
+                            "noise": noise,
+                            "explorer": args.explorer,
+                            "shaft": args.shaft,
+                            "what": f"{fam.name} pose {k} (p={p:.2f}) turned {ang:.0f}° "
+                            f"noise {noise * 1000:g} mm",
+                            "label": label,
+                            "desc": what,
+                        }
+                    )
+            groups.append((fam, noise, len(poses), jobs))
+    everything = [job for _, _, _, jobs in groups for job in jobs]
+    if args.workers > 1:
+        from concurrent.futures import ProcessPoolExecutor
+
+        with ProcessPoolExecutor(args.workers) as pool:
+            outcomes = list(pool.map(_job, everything, chunksize=1))
+    else:
+        outcomes = [_job(job) for job in everything]
+    totals = {m: [0, 0] for m in modes}
+    wrong: list[str] = []
+    print(
+        f"{'family':24s} {'mode':6s} {'poses':>5s} {'right':>7s} {'touch/face':>10s} "
+        f"{'s/object':>8s} {'indexed':>7s} {'turning':>7s}"
+    )
+    at = 0
+    for fam, noise, n_poses, jobs in groups:
+        outs = outcomes[at : at + len(jobs)]
+        at += len(jobs)
+        right = sum(o["got"] == j["label"] for o, j in zip(outs, jobs, strict=True))
+        for o, j in zip(outs, jobs, strict=True):
+            if o["got"] != j["label"]:
+                wrong.append(f"{j['what']}: {o['got']} (want {j['label']}); {j['desc']}")
+        per_face = [o["touches"] / max(1, o["faces"]) for o in outs]
+        secs = [o["seconds"] for o in outs]
+        motions = sum(o["motions"] for o in outs)
+        share = sum(o["indexed"] for o in outs) / motions if motions else 0.0
+        turning = (
+            f"{sum(o['turning'] for o in outs) / sum(secs):7.0%}"
+            if args.explorer == "mujoco" and secs
+            else "      -"
+        )
+        totals[noise][0] += right
+        totals[noise][1] += len(jobs)
+        mode = "exact" if noise == 0 else f"{noise * 1000:g}mm"
+        print(
+            f"{fam.name:24s} {mode:6s} {n_poses:5d} {right:3d}/{len(jobs):<3d} "
+            f"{statistics.median(per_face) if per_face else math.nan:10.2f} "
+            f"{statistics.mean(secs) if secs else math.nan:8.2f} {share:7.0%} {turning}",
+            flush=True,
+        )
     for noise, (right, runs) in totals.items():
         mode = "exact contacts" if noise == 0 else f"{noise * 1000:g} mm noise"
         print(f"right answers, {mode}: {right}/{runs} = {right / max(1, runs):.1%}")
