@@ -197,6 +197,9 @@ def load_object(obj: ObjectLike, *, name: str | None = None) -> trimesh.Trimesh:
     if not finite:
         raise ObjectError(f"{label}: the mesh has non-finite (NaN or infinite) vertex coordinates")
     mesh.process()
+    unique = mesh.unique_faces()
+    if not bool(unique.all()):  # the same triangle twice (an export glitch, a part pasted twice)
+        mesh.update_faces(unique)
     notes: list[str] = []
     if not mesh.is_watertight:
         mesh = _weld(mesh, notes)
@@ -214,8 +217,9 @@ def load_object(obj: ObjectLike, *, name: str | None = None) -> trimesh.Trimesh:
     if not mesh.is_watertight:
         mesh = _close(mesh, notes)
     solid = mesh if mesh.is_watertight else mesh.convex_hull
-    volume = abs(float(solid.volume))
-    if volume < current().objects.min_size ** 3:
+    with np.errstate(all="ignore"):
+        volume = abs(float(solid.volume))
+    if not volume >= current().objects.min_size ** 3:  # NaN too
         raise ObjectError(f"{label}: not a solid: degenerate mesh with no volume")
     if float(extent.max()) > current().objects.max_size:
         raise ObjectError(

@@ -582,3 +582,46 @@ def test_validate_goes_on_after_a_file_that_exhausts_memory(
     captured = capsys.readouterr()
     assert f"tactile-kb validate: error: {huge}: out of memory" in captured.err
     assert captured.out.startswith(f"{good_rules}: ok:")
+
+
+_PART = st.tuples(
+    st.sampled_from(["box", "tetra", "sheet", "soup"]),
+    st.floats(0.0005, 0.12),  # size, metres
+    st.tuples(*(st.floats(-0.08, 0.08) for _ in range(3))),  # offset
+)
+
+
+@settings(max_examples=60, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(st.lists(_PART, min_size=1, max_size=5), st.integers(0, 2**16))
+def test_fuzzed_meshes_of_parts_load_or_give_one_line(
+    parts: list[tuple[str, float, tuple[float, float, float]]], seed: int
+) -> None:
+    # overlapping, touching and distant bodies, open sheets and loose triangles: every mesh
+    # trimesh can hold either loads as one object or is refused in one line
+    import numpy as np
+    import trimesh
+
+    from tactile_kb.errors import ObjectError
+    from tactile_kb.objects import load_object
+
+    rng = np.random.default_rng(seed)
+    meshes = []
+    for kind, size, offset in parts:
+        if kind == "box":
+            m = trimesh.creation.box((size, size * 0.7, size * 0.5))
+        elif kind == "tetra":
+            m = trimesh.Trimesh(
+                rng.normal(size=(4, 3)) * size, [[0, 1, 2], [0, 3, 1], [1, 3, 2], [0, 2, 3]]
+            )
+        elif kind == "sheet":
+            m = trimesh.Trimesh([[0, 0, 0], [size, 0, 0], [0, size, 0]], [[0, 1, 2]])
+        else:
+            m = trimesh.Trimesh(rng.normal(size=(9, 3)) * size, np.arange(9).reshape(3, 3))
+        m.apply_translation(offset)
+        meshes.append(m)
+    mesh = trimesh.util.concatenate(meshes)
+    error = _raised(lambda: load_object(mesh, name="fuzz"))
+    assert error is None or isinstance(error, ObjectError), repr(error)
+    if error is not None:
+        assert str(error).startswith("fuzz: ")
+        assert "\n" not in str(error)
