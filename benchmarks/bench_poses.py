@@ -136,18 +136,9 @@ ALL = [
 
 
 def stable_poses(mesh: trimesh.Trimesh) -> list[tuple[trimesh.Trimesh, float]]:
-    """``mesh`` in each stable pose of probability ≥ 2 %, resting on z = 0, centred."""
-    transforms, probs = trimesh.poses.compute_stable_poses(mesh)
-    out = []
-    best = int(np.argmax(probs))  # a sphere, no pose of which reaches 2 %: its most probable
-    for k, (t, p) in enumerate(zip(transforms, probs, strict=True)):
-        if p < MIN_PROBABILITY and not (k == best and probs[best] < MIN_PROBABILITY):
-            continue
-        m = mesh.copy()
-        m.apply_transform(t)
-        m.apply_translation((-m.bounds.mean(axis=0)[0], -m.bounds.mean(axis=0)[1], -m.bounds[0][2]))
-        out.append((m, float(p)))
-    return out
+    """``mesh`` in each stable pose of probability ≥ 2 % (or its most probable one), resting on
+    z = 0, centred, most probable first (``tactile_kb.solids.stable_poses``)."""
+    return solids.stable_poses(mesh, min_probability=MIN_PROBABILITY)
 
 
 def _job(job: dict) -> dict:  # type: ignore[type-arg]

@@ -132,3 +132,27 @@ def test_fig5_objects_in_the_papers_order() -> None:
 def test_bad_arguments_are_usage_errors(call: object, message: str) -> None:
     with pytest.raises(UsageError, match=message):
         call()  # type: ignore[operator]
+
+
+def test_stable_poses_rest_on_a_face_most_probable_first() -> None:
+    block = solids.box(0.06, 0.04, 0.02)
+    poses = solids.stable_poses(block)
+    probs = [p for _, p in poses]
+    assert len(poses) == 6  # each face of a box is a resting face
+    assert probs == sorted(probs, reverse=True)
+    assert sum(probs) == pytest.approx(1.0, abs=1e-6)
+    heights = []
+    for posed, _ in poses:
+        lo, hi = posed.bounds
+        assert lo[2] == pytest.approx(0.0, abs=1e-12)
+        assert (lo[:2] + hi[:2]) == pytest.approx((0.0, 0.0), abs=1e-12)
+        down = posed.face_normals[:, 2] < -0.999999
+        assert np.allclose(posed.triangles_center[down][:, 2], 0.0, atol=1e-12)  # on a face
+        heights.append(round(float(hi[2]), 6))
+    # lying flat is the most probable, standing on the smallest face the least
+    assert heights[:2] == [0.02, 0.02]
+    assert heights[-2:] == [0.06, 0.06]
+    # a sphere has no pose of 2 %: its most probable one alone
+    assert len(solids.stable_poses(solids.sphere(0.03))) == 1
+    with pytest.raises(UsageError, match="min_probability"):
+        solids.stable_poses(block, min_probability=1.5)
