@@ -333,7 +333,7 @@ def stable_poses(
         raise UsageError(f"min_probability must be between 0 and 1, got {min_probability}")
     transforms, probs = trimesh.poses.compute_stable_poses(mesh)
     order = np.argsort(-np.asarray(probs, dtype=float), kind="stable")
-    out = []
+    out: list[tuple[trimesh.Trimesh, float]] = []
     for k in order:
         if probs[k] < min_probability and out:
             break
