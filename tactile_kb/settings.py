@@ -181,6 +181,22 @@ class GeometrySettings(_Group):
         description="Degrees: two faces whose normals differ by less than this may merge if "
         "coplanar.",
     )
+    unrefined_merge_cones: float = Field(
+        0.0,
+        ge=0,
+        description="Sensor cones: a face whose tip centres do not span a plane (its normal the "
+        "quantised sensors') merges with a face whose centres do when their normals differ by "
+        "less than this many of the finger's quantisation cones (half its sensor spacing), one "
+        "plane fits both within split_tol, and that plane is the spanning face's.",
+    )
+    unrefined_merge_sigmas: float = Field(
+        3.0,
+        gt=0,
+        description="A face whose tip centres do not span a plane merges with a spanning one "
+        "(unrefined_merge_cones) only when its centres lie on that face's plane within this "
+        "many times the face's own scatter (at least robust_rho tip radii, or the declared "
+        "noise).",
+    )
     table_tol: float = Field(
         0.001,
         gt=0,
