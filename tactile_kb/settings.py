@@ -182,7 +182,7 @@ class GeometrySettings(_Group):
         "coplanar.",
     )
     unrefined_merge_cones: float = Field(
-        0.0,
+        2.5,
         ge=0,
         description="Sensor cones: a face whose tip centres do not span a plane (its normal the "
         "quantised sensors') merges with a face whose centres do when their normals differ by "
@@ -193,9 +193,9 @@ class GeometrySettings(_Group):
         3.0,
         gt=0,
         description="A face whose tip centres do not span a plane merges with a spanning one "
-        "(unrefined_merge_cones) only when its centres lie on that face's plane within this "
-        "many times the face's own scatter (at least robust_rho tip radii, or the declared "
-        "noise).",
+        "(unrefined_merge_cones) only when one plane passes within this many times the "
+        "spanning face's own scatter (at least robust_rho tip radii, or the declared noise) of "
+        "every centre of both.",
     )
     table_tol: float = Field(
         0.001,

@@ -671,14 +671,14 @@ def _merge_coplanar(
     """Merge groups whose fitted planes coincide (normals within ``merge_deg``, one plane fits).
 
     A group whose centres do not span a plane (touched at one spot or along one line) has the
-    sensors' normal, quantised to within ``cone`` degrees (two neighbouring sensors firing on
-    a scanned face's bump give their mean, half a spacing off): it merges with a group whose
-    centres do span a plane when the normals differ by less than
-    ``geometry.unrefined_merge_cones`` × ``cone``, the centres of both fit one plane within
-    ``tol``, that plane is the spanning group's (within ``merge_deg``), and the other's
-    centres lie on the spanning group's plane within ``geometry.unrefined_merge_sigmas`` ×
-    its scatter (at least ``scale``, the robust fits' least scale): they are on the face,
-    and their sensors' tilt is the quantisation, not another face."""
+    sensors' normal, quantised to within ``cone`` degrees (a scanned face's bump makes a
+    neighbouring sensor fire, or two together, which give their mean): it merges with another
+    group when the normals differ by less than ``geometry.unrefined_merge_cones`` × ``cone``,
+    the centres of both span one plane, that plane is the spanning group's (within
+    ``merge_deg``; with two groups that span none, within the same loose angle of both), and
+    every centre of both lies on it within ``geometry.unrefined_merge_sigmas`` × the spanning
+    group's scatter (at least ``scale``, the robust fits' least scale): they are on one face,
+    and their sensors' tilt is the quantisation or the surface's detail, not another face."""
     cos_min = math.cos(math.radians(merge_deg))
     loose = max(merge_deg, current().geometry.unrefined_merge_cones * cone)
     if centres is None:
@@ -692,22 +692,29 @@ def _merge_coplanar(
         refined = np.asarray([f.refined for f in fits])
         cos = normals @ normals.T
         # candidate pairs (i < j, row by row) from one matrix product, each confirmed below
-        one_refined = refined[:, None] != refined[None, :]
-        near = np.triu((cos >= cos_min - 1e-9) | (one_refined & (cos >= cos_loose - 1e-9)), 1)
+        unspanned = ~(refined[:, None] & refined[None, :])
+        near = np.triu((cos >= cos_min - 1e-9) | (unspanned & (cos >= cos_loose - 1e-9)), 1)
         for i, j in zip(*np.nonzero(near), strict=True):
             both = np.concatenate([groups[i], groups[j]])
             joint = fit(both)
             if joint.max_res > tol:
                 continue
             if fits[i].normal @ fits[j].normal < cos_min:
-                spanning, line = (i, j) if fits[i].refined else (j, i)
-                plane = fits[spanning]
-                if not joint.refined or joint.normal @ plane.normal < cos_min:
+                if not joint.refined:
                     continue
-                # the line's centres on the spanning face's plane, within its own scatter
-                scatter = max(scale, _mad_sigma(plane.residuals))
-                off = centres[groups[line]] @ plane.normal - plane.centre_offset
-                if float(np.abs(off).max()) > current().geometry.unrefined_merge_sigmas * scatter:
+                spanning = [fits[k] for k in (i, j) if fits[k].refined]
+                if spanning:  # the plane is the spanning group's
+                    if joint.normal @ spanning[0].normal < cos_min:
+                        continue
+                    scatter = max(scale, _mad_sigma(spanning[0].residuals))
+                else:  # two lines (or spots) that together span a plane near both normals
+                    if min(joint.normal @ fits[i].normal, joint.normal @ fits[j].normal) < (
+                        cos_loose
+                    ):
+                        continue
+                    scatter = scale
+                # one plane through both, as close to every centre as a face's own lie
+                if joint.max_res > current().geometry.unrefined_merge_sigmas * scatter:
                     continue
             groups = [g for k, g in enumerate(groups) if k not in (i, j)] + [both]
             changed = True
