@@ -193,9 +193,9 @@ class GeometrySettings(_Group):
         3.0,
         gt=0,
         description="A face whose tip centres do not span a plane merges with a spanning one "
-        "(unrefined_merge_cones) only when one plane passes within this many times the "
+        "(unrefined_merge_cones) only when the plane of both passes within this many times the "
         "spanning face's own scatter (at least robust_rho tip radii, or the declared noise) of "
-        "every centre of both.",
+        "the other's centres (their median).",
     )
     table_tol: float = Field(
         0.001,

@@ -676,9 +676,10 @@ def _merge_coplanar(
     group when the normals differ by less than ``geometry.unrefined_merge_cones`` × ``cone``,
     the centres of both span one plane, that plane is the spanning group's (within
     ``merge_deg``; with two groups that span none, within the same loose angle of both), and
-    every centre of both lies on it within ``geometry.unrefined_merge_sigmas`` × the spanning
-    group's scatter (at least ``scale``, the robust fits' least scale): they are on one face,
-    and their sensors' tilt is the quantisation or the surface's detail, not another face."""
+    the other group's centres lie on it within ``geometry.unrefined_merge_sigmas`` × the
+    spanning group's scatter (at least ``scale``, the robust fits' least scale), by their
+    median: they are on one face, and their sensors' tilt is the quantisation or the
+    surface's detail, not another face."""
     cos_min = math.cos(math.radians(merge_deg))
     loose = max(merge_deg, current().geometry.unrefined_merge_cones * cone)
     if centres is None:
@@ -703,6 +704,7 @@ def _merge_coplanar(
                 if not joint.refined:
                     continue
                 spanning = [fits[k] for k in (i, j) if fits[k].refined]
+                line = groups[j] if fits[i].refined else groups[i]
                 if spanning:  # the plane is the spanning group's
                     if joint.normal @ spanning[0].normal < cos_min:
                         continue
@@ -712,9 +714,11 @@ def _merge_coplanar(
                         cos_loose
                     ):
                         continue
-                    scatter = scale
-                # one plane through both, as close to every centre as a face's own lie
-                if joint.max_res > current().geometry.unrefined_merge_sigmas * scatter:
+                    scatter, line = scale, both
+                # the other group's centres on that plane, as close as a face's own lie to it
+                # (their median: a bump under one of them is the surface's detail)
+                off = np.abs(centres[line] @ joint.normal - joint.centre_offset)
+                if float(np.median(off)) > current().geometry.unrefined_merge_sigmas * scatter:
                     continue
             groups = [g for k, g in enumerate(groups) if k not in (i, j)] + [both]
             changed = True
