@@ -185,9 +185,11 @@ class GeometrySettings(_Group):
         2.5,
         ge=0,
         description="Sensor cones: a face whose tip centres do not span a plane (its normal the "
-        "quantised sensors') merges with a face whose centres do when their normals differ by "
-        "less than this many of the finger's quantisation cones (half its sensor spacing), one "
-        "plane fits both within split_tol, and that plane is the spanning face's.",
+        "quantised sensors': a scanned face's bump fires the neighbouring sensor, 30° off on the "
+        "33-sensor finger) merges with another face when their normals differ by less than this "
+        "many of the finger's quantisation cones (half its sensor spacing), their centres together "
+        "span one plane within split_tol, and that plane is the spanning face's (two faces that "
+        "span none: within this angle of both).",
     )
     unrefined_merge_sigmas: float = Field(
         3.0,

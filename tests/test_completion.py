@@ -237,4 +237,5 @@ def test_a_face_touched_once_with_a_tilted_sensor_is_also_probed_level() -> None
     assert abs(p.target[1]) < 0.002  # where the spot was touched
     assert abs(p.target[2] - 0.012) >= 0.5 * rho  # at another height
     tilted = [p for p in probes if "touched at one height" in p.reason and p not in level]
-    assert tilted and tilted[0].normal[2] > 0.2  # the quantised normal's probe comes first
+    assert tilted
+    assert tilted[0].normal[2] > 0.2  # the quantised normal's probe comes first

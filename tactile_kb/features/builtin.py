@@ -623,8 +623,11 @@ def spread_bend(
     Tip centres on a plane face lie on the plane offset by ρ, whichever sensor closed; on a
     surface that turns they fall away from it. Along ``u``, the in-plane direction in which
     the two most different interior sensor normals differ, the heights of the face's centres
-    are fitted by a plane plus ``a·u²``; the surface then turns by ``−2a/W`` (radians) over
-    the centres' extent ``W`` along ``u`` (positive: convex). Centres more than
+    are fitted by a plane plus ``a·u²``: the curvature ``−2a/W²`` over the centres' extent
+    ``W`` along ``u``, and the turn is that curvature over the extent of all the face's
+    contacts along ``u`` (radians; positive: convex). The centres fitted are those whose feet
+    lie inside the face's polygon, when five or more do (a foot beyond an edge touched that
+    edge, rounded on a real object, or the face beyond), else all of them. Centres more than
     :data:`~tactile_kb.geometry.planes.INSIDE_SIGMAS` scales (their own scatter, 1.4826 × the
     median absolute deviation) inside the least-squares plane of them all are touches of an
     edge beside the face and left out, unless more than a quarter would be (then the face

@@ -701,7 +701,7 @@ def _merge_coplanar(
             if joint.max_res > tol:
                 continue
             if fits[i].normal @ fits[j].normal < cos_min:
-                if not joint.refined:
+                if not joint.refined or centres is None:
                     continue
                 spanning = [fits[k] for k in (i, j) if fits[k].refined]
                 line = groups[j] if fits[i].refined else groups[i]
