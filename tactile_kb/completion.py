@@ -204,17 +204,18 @@ def completion_probes(model: ObjectModel, *, height_gap: float | None = None) ->
         z = lo_z if abs(lo_z - have) > abs(hi_z - have) else hi_z
         if abs(z - have) < gap:
             continue  # the face is too low for two heights
+        reason = f"the face facing {_name(n)} touched at one height"
         point = _section_point(ring, z)
-        if point is None:
-            continue
-        probes.append(
-            Probe(
-                _v(point + rho * n),
-                _v(n),
-                4.0 * rho,
-                f"the face facing {_name(n)} touched at one height",
-            )
-        )
+        if point is not None:
+            probes.append(Probe(_v(point + rho * n), _v(n), 4.0 * rho, reason))
+        if not face.refined and float(np.hypot(n[0], n[1])) > 1e-6 and face.contacts:
+            # then, if that fails: its normal is the sensors' (quantised: a scanned face's
+            # bump fires two sensors and gives their mean, tilted), and so is its outline;
+            # approach level where its contacts are, at the other height
+            flat = np.array([n[0], n[1], 0.0]) / float(np.hypot(n[0], n[1]))
+            target = centres[list(face.contacts)].mean(axis=0)
+            target[2] = z + rho * n[2]
+            probes.append(Probe(_v(target), _v(flat), 4.0 * rho, reason + ", approached level"))
     # a face left out as concave but touched at one height: its quantised normal may be what
     # made it look concave (an overhanging side read as vertical)
     probes += _one_height_probes(model, centres, rho, gap, concave=True)

@@ -209,6 +209,24 @@ class GeometrySettings(_Group):
         description="Degrees: two faces whose normals differ by less than this may merge if "
         "coplanar.",
     )
+    unrefined_merge_cones: float = Field(
+        2.5,
+        ge=0,
+        description="Sensor cones: a face whose tip centres do not span a plane (its normal the "
+        "quantised sensors': a scanned face's bump fires the neighbouring sensor, 30° off on the "
+        "33-sensor finger) merges with another face when their normals differ by less than this "
+        "many of the finger's quantisation cones (half its sensor spacing), their centres together "
+        "span one plane within split_tol, and that plane is the spanning face's (two faces that "
+        "span none: within this angle of both).",
+    )
+    unrefined_merge_sigmas: float = Field(
+        3.0,
+        gt=0,
+        description="A face whose tip centres do not span a plane merges with a spanning one "
+        "(unrefined_merge_cones) only when the plane of both passes within this many times the "
+        "spanning face's own scatter (at least robust_rho tip radii, or the declared noise) of "
+        "the other's centres (their median).",
+    )
     table_tol: float = Field(
         0.001,
         gt=0,

@@ -213,3 +213,46 @@ def test_explore_refuses_what_is_not_a_solid_in_one_line(
     assert len(err.splitlines()) == 1
     assert "internal error" not in err
     assert not (tmp_path / "r.json").exists()
+
+
+def test_a_face_touched_once_with_a_tilted_sensor_is_also_probed_level() -> None:
+    # A box whose −x side was touched at one spot only, where a bump closed the sensor square
+    # to it and the one below together: the face's normal is their mean, 15° down, and its
+    # outline leans with it. Besides the probe along that normal, the completion asks for one
+    # approached level (horizontal) where the face was touched, at another height: the side is
+    # there whatever the quantised normal says.
+    from tactile_kb.touch.finger import builtin_finger
+    from tactile_kb.touch.synthetic import sample_record
+
+    finger = builtin_finger("33")
+    rec = sample_record(solids.box(0.1, 0.08, 0.03), finger, per_face=10, noise=0.0, seed=3)
+    s = np.asarray(rec.sensor_directions)
+    pair = (int(np.argmax(s @ [1.0, 0.0, 0.0])), int(np.argmax(s @ [0.866, 0.0, -0.5])))
+    d = s[list(pair)].sum(axis=0)
+    d /= np.linalg.norm(d)
+    rho = rec.tip_radius
+    keep = [c for c in rec.contacts if c.direction[0] < 0.5]  # every contact but the −x side's
+    spot = [
+        keep[0].model_copy(
+            update={
+                "centre": (-0.05 - rho, y, 0.012),
+                "direction": tuple(float(v) for v in d),
+                "point": (-0.05 - rho + rho * d[0], y, 0.012 + rho * d[2]),
+                "sensors": pair,
+                "sensor": pair[1],
+            }
+        )
+        for y in (0.001, 0.0)
+    ]
+    model = build_model(rec.model_copy(update={"contacts": [*keep, *spot]}))
+    assert model.polyhedron is not None
+    probes = completion_probes(model)
+    level = [p for p in probes if p.reason.endswith("approached level")]
+    assert len(level) == 1
+    p = level[0]
+    assert np.allclose(p.normal, (-1.0, 0.0, 0.0), atol=1e-9)  # level, from −x
+    assert abs(p.target[1]) < 0.002  # where the spot was touched
+    assert abs(p.target[2] - 0.012) >= 0.5 * rho  # at another height
+    tilted = [p for p in probes if "touched at one height" in p.reason and p not in level]
+    assert tilted
+    assert tilted[0].normal[2] > 0.2  # the quantised normal's probe comes first

@@ -643,3 +643,15 @@ def test_an_assumed_top_establishes_no_equal_edges() -> None:
     assert get_feature("orthogonal_faces").fn(closed) is True  # directions do not need the height
     full = build_model(sample_record(solids.box(0.08, 0.08, 0.08), builtin_finger("33"), seed=3))
     assert get_feature("equal_edges").fn(full) is True
+
+
+def test_feet_beyond_a_face_polygon_are_not_inside_it() -> None:
+    # a 4 cm square in z = 0: a point 5 mm inside an edge is 5 mm from it, one 5 mm beyond
+    # the edge (the foot of a touch of the rounded edge or of the next face) is −5 mm
+    from tactile_kb.features.builtin import _polygon_edge_distance
+
+    square = np.array([[0, 0, 0], [0.04, 0, 0], [0.04, 0.04, 0], [0, 0.04, 0]], dtype=float)
+    points = np.array([[0.02, 0.005, 0], [0.02, -0.005, 0], [0.045, 0.02, 0], [0.02, 0.02, 0]])
+    for ring in (square, square[::-1]):  # either orientation
+        d = _polygon_edge_distance(points, ring, np.array([0.0, 0.0, 1.0]))
+        assert d == pytest.approx([0.005, -0.005, -0.005, 0.02])

@@ -127,3 +127,66 @@ def test_touches_of_an_edge_beside_a_face_do_not_tilt_it() -> None:
     s = np.tile([1.0, 0.0, 0.0], (len(c), 1))
     normal, _, _, _ = fit_face(c, s)
     assert math.degrees(math.acos(min(1.0, float(normal[0])))) > 0.5
+
+
+def _with_line_on_face(
+    rec: ExplorationRecord, sensors: tuple[int, ...], off: float, seed: int = 0
+) -> ExplorationRecord:
+    """``rec`` with six more contacts along a horizontal line on the box's face x = −0.05, at
+    ``off`` metres outside its plane, that closed ``sensors`` together (their mean direction)."""
+    s = np.asarray(rec.sensor_directions)
+    d = s[list(sensors)].sum(axis=0)
+    d /= np.linalg.norm(d)
+    rng = np.random.default_rng(seed)
+    rho = rec.tip_radius
+    extra = []
+    for y in np.linspace(-0.025, 0.025, 6):
+        c = np.array([-0.05 - rho - off + rng.normal(0.0, 0.0001), y, 0.02])
+        extra.append(
+            Contact(
+                step=len(rec.contacts) + len(extra),
+                centre=(float(c[0]), float(c[1]), float(c[2])),
+                sensors=sensors,
+                sensor=sensors[-1],
+                direction=(float(d[0]), float(d[1]), float(d[2])),
+                point=tuple(float(v) for v in c + rho * d),
+                kind="slide",
+            )
+        )
+    return rec.model_copy(update={"contacts": [*rec.contacts, *extra]})
+
+
+@pytest.mark.parametrize("tilt", [1, 2])  # the neighbouring sensor below, or both together
+def test_a_line_whose_sensor_tilts_on_a_face_is_that_face(tilt: int) -> None:
+    # A scanned face's bump makes the sensor below the one square to the face fire (30° off),
+    # alone or with it: the contacts slid along it at one height cluster apart and span no
+    # plane of their own. Their centres lie on the face's plane, so they are the face (the
+    # box keeps five faces and the table); the same line on a step 5 mm out is a face of its
+    # own, and so is the line 30° off when merging is switched off.
+    from tactile_kb.settings import override
+
+    rec = sample_record(solids.box(0.1, 0.08, 0.06), F33, per_face=12, noise=0.0, seed=1)
+    s = np.asarray(rec.sensor_directions)
+    square = int(np.argmax(s @ [1.0, 0.0, 0.0]))
+    below = int(np.argmax(s @ [math.cos(math.radians(30)), 0.0, -math.sin(math.radians(30))]))
+    sensors = (below,) if tilt == 1 else (square, below)
+    on_face = merge_planes(_with_line_on_face(rec, sensors, 0.0))
+    assert len(on_face) == 6
+    left = min(on_face, key=lambda f: f.normal[0])
+    assert left.n_contacts == 12 + 6
+    assert left.normal[0] == pytest.approx(-1.0, abs=1e-3)
+    assert len(merge_planes(_with_line_on_face(rec, sensors, 0.005))) == 7
+    if tilt == 1:  # 30° off: the sensors' clusters keep it apart, only the merge joins it
+        with override(geometry={"unrefined_merge_cones": 0.0}):
+            assert len(merge_planes(_with_line_on_face(rec, sensors, 0.0))) == 7
+
+
+def test_means_of_neighbouring_sensors_are_quantised_directions() -> None:
+    from tactile_kb.geometry.planes import _is_quantised
+
+    s = np.asarray(F33.directions, dtype=float)
+    pair = s[0] + s[int(np.argsort(-(s @ s[0]))[1])]
+    mean = pair / np.linalg.norm(pair)
+    assert _is_quantised(np.vstack([s[:3], mean]), s)
+    other = np.array([0.3, 0.5, -0.81])
+    assert not _is_quantised(np.vstack([s[:3], other / np.linalg.norm(other)]), s)

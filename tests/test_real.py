@@ -142,3 +142,26 @@ def test_a_touch_on_a_rounded_edge_is_not_a_face() -> None:
     assert len(model.contact_faces) == 5
     assert model.options["edge_contacts"]
     assert build_model(rec, edge_rounding=None).contact_faces != model.contact_faces
+
+
+@pytest.mark.parametrize(
+    ("mesh", "rules", "label"),
+    [
+        # a 9.5 cm cube scanned at level 1 (0.2 mm noise, 3 % rounding, 0.3 mm bumps): one side
+        # was touched at one spot where a bump closed two sensors, so its normal leaned 15° and
+        # the probe along it met the top's rounded edge; the level probe finds the side
+        (
+            solids.rotate_about_z(solids.box(0.0949, 0.0949, 0.0949), 236.3),
+            "parallelepipeds",
+            "cube",
+        ),
+        # a 13 cm tetrahedron at level 1: one face slid along with the sensor below the square
+        # one firing was a second face 8° from the first; its centres lie on the first's plane
+        (solids.rotate_about_z(solids.tetrahedron(0.131), 104.7), "polyhedra", "tetrahedron"),
+    ],
+)
+def test_explored_scans_keep_their_class(mesh: trimesh.Trimesh, rules: str, label: str) -> None:
+    scan = perturb(mesh, 1, seed=0)
+    result = classify(scan, rules=rules, explorer="stepper", seed=0)
+    assert result.decision.label == label
+    assert result.record.ending == "closed"

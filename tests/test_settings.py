@@ -40,6 +40,8 @@ DOCUMENTED: dict[str, dict[str, float]] = {
         "split_tol": 0.0025,
         "span": 0.002,
         "merge_deg": 4.0,
+        "unrefined_merge_cones": 2.5,
+        "unrefined_merge_sigmas": 3.0,
         "table_tol": 0.001,
         "robust_rho": 0.02,
         "max_refine_deg": 35.0,

@@ -542,6 +542,7 @@ class _Spread:
     interior: tuple[int, ...]  # the face's contacts away from its edges (record indices)
     any_angle: float = 0.0  # largest angle between any two of the face's contacts
     any_pair: tuple[int, int] = (-1, -1)
+    on_face: tuple[int, ...] = ()  # contacts whose feet lie inside the face's polygon
 
 
 def _face_spreads(model: ObjectModel) -> list[_Spread]:
@@ -582,15 +583,16 @@ def _face_spreads(model: ObjectModel) -> list[_Spread]:
             inside = (edge_dist[:, None] > band) & (edge_dist[None, :] > band)
             own = edge_dist > rho * np.sin(np.radians(ang.max(axis=1))) + rounding
             interior = tuple(int(face.contacts[k]) for k in np.flatnonzero(own))
+            on_face = tuple(int(face.contacts[k]) for k in np.flatnonzero(edge_dist > 0.0))
             e, f = np.unravel_index(int(np.argmax(ang)), ang.shape)
             anywhere = (float(ang[e, f]), (int(face.contacts[e]), int(face.contacts[f])))
             if not inside.any():
-                out.append(_Spread(0.0, (-1, -1), interior, *anywhere))
+                out.append(_Spread(0.0, (-1, -1), interior, *anywhere, on_face))
                 continue
             masked = np.where(inside, ang, -1.0)
             a, b = np.unravel_index(int(np.argmax(masked)), masked.shape)
             pair = (int(face.contacts[a]), int(face.contacts[b]))
-            out.append(_Spread(float(masked[a, b]), pair, interior, *anywhere))
+            out.append(_Spread(float(masked[a, b]), pair, interior, *anywhere, on_face))
         return out
 
     return _derived(
@@ -621,8 +623,11 @@ def spread_bend(
     Tip centres on a plane face lie on the plane offset by ρ, whichever sensor closed; on a
     surface that turns they fall away from it. Along ``u``, the in-plane direction in which
     the two most different interior sensor normals differ, the heights of the face's centres
-    are fitted by a plane plus ``a·u²``; the surface then turns by ``−2a/W`` (radians) over
-    the centres' extent ``W`` along ``u`` (positive: convex). Centres more than
+    are fitted by a plane plus ``a·u²``: the curvature ``−2a/W²`` over the centres' extent
+    ``W`` along ``u``, and the turn is that curvature over the extent of all the face's
+    contacts along ``u`` (radians; positive: convex). The centres fitted are those whose feet
+    lie inside the face's polygon, when five or more do (a foot beyond an edge touched that
+    edge, rounded on a real object, or the face beyond), else all of them. Centres more than
     :data:`~tactile_kb.geometry.planes.INSIDE_SIGMAS` scales (their own scatter, 1.4826 × the
     median absolute deviation) inside the least-squares plane of them all are touches of an
     edge beside the face and left out, unless more than a quarter would be (then the face
@@ -654,6 +659,9 @@ def spread_bend(
     # them all (a touch of an edge beside the face: nearer than ρ to its plane), at the
     # scale of their own scatter about it: a bent face's outer centres stay
     face_contacts = model.faces[model.face_of[face]].contacts
+    every = np.asarray([contacts[i].centre for i in face_contacts], dtype=float)
+    if len(s.on_face) >= 5:  # the face's own centres: not those of its (rounded) edges
+        face_contacts = s.on_face
     c = np.asarray([contacts[i].centre for i in face_contacts], dtype=float)
     if len(c) >= 3:
         mean = c.mean(axis=0)
@@ -684,8 +692,13 @@ def spread_bend(
     rest = h - design @ np.linalg.lstsq(design, h, rcond=None)[0]
     scatter = math.sqrt(float(rest @ rest) / (len(h) - 4))  # about the bent fit: relief
     sigma = max(floor, scatter)
-    # κ = −2a/W², turn over W = κ·W = −2a/W
-    return math.degrees(-2.0 * a / width), math.degrees(2.0 * sigma / (width * math.sqrt(norm2)))
+    # κ = −2a/W², turned over the extent of all the face's contacts (its rounded edges too)
+    whole = max(width, float(np.ptp(every @ u_dir)))
+    k = whole / width
+    return (
+        math.degrees(-2.0 * a / width * k),
+        math.degrees(2.0 * sigma / (width * math.sqrt(norm2)) * k),
+    )
 
 
 def _mad(r: FloatArray) -> float:
@@ -734,7 +747,9 @@ def _spread_evidence(model: ObjectModel, spread_deg: float) -> tuple[bool, int]:
 def _polygon_edge_distance(
     points: FloatArray, vertices: FloatArray, normal: FloatArray
 ) -> FloatArray:
-    """Distance (m) of points in a face's plane to the nearest edge of the face's polygon."""
+    """Distance (m) of points in a face's plane to the nearest edge of the face's convex
+    polygon, negative outside it (a foot beyond an edge is a touch of the edge or of the
+    face beyond)."""
     a = vertices
     b = np.roll(vertices, -1, axis=0)
     ab = b - a
@@ -742,7 +757,12 @@ def _polygon_edge_distance(
         np.einsum("pkj,kj->pk", points[:, None, :] - a[None], ab) / (ab * ab).sum(axis=1), 0, 1
     )
     closest = a[None] + t[..., None] * ab[None]
-    return np.asarray(np.linalg.norm(points[:, None, :] - closest, axis=2).min(axis=1))
+    dist = np.linalg.norm(points[:, None, :] - closest, axis=2).min(axis=1)
+    # outside the (convex) polygon: beyond one of its sides, as its centroid is not
+    side = np.einsum("kj,pkj->pk", np.cross(ab, normal), points[:, None, :] - a[None])
+    centre = np.einsum("kj,kj->k", np.cross(ab, normal), vertices.mean(axis=0) - a)
+    outside = (side * np.sign(centre)[None, :] < 0).any(axis=1)
+    return np.asarray(np.where(outside, -dist, dist))
 
 
 def face_sagitta(model: ObjectModel, face: Face) -> tuple[float, float] | None:

@@ -126,6 +126,11 @@ OUTSIDE_SIGMAS = 4.0
 scale touched relief on it (a plane's centres lie on it, within the noise)."""
 
 
+_ROUGH_MIN = 6
+"""Faces with at least this many contacts show the surface's detail in their centres' scatter
+(:func:`_faces_from_contacts` lends it to faces of three or four contacts)."""
+
+
 @dataclass(frozen=True)
 class Face:
     """One face of the model: the plane ``normal · x = offset`` with ``normal`` outward.
@@ -408,9 +413,21 @@ def _normal_clusters(normals: FloatArray, cut_deg: float) -> NDArray[np.intp]:
 
 
 def _is_quantised(directions: FloatArray, sensors: FloatArray) -> bool:
+    """Whether every direction is a sensor's, or the normalised mean of two to four
+    neighbouring sensors' (the direction a contact that closed them together reports)."""
     if len(sensors) == 0:
         return False
-    return bool(((directions @ sensors.T).max(axis=1) > 1.0 - 1e-9).all())
+    cos = directions @ sensors.T
+    if bool((cos.max(axis=1) > 1.0 - 1e-9).all()):
+        return True
+    near = np.argsort(-cos, axis=1)[:, : min(4, len(sensors))]
+    found = cos.max(axis=1) > 1.0 - 1e-9
+    for size in range(2, near.shape[1] + 1):
+        for subset in itertools.combinations(range(near.shape[1]), size):
+            mean = sensors[near[:, list(subset)]].sum(axis=1)
+            mean /= np.maximum(np.linalg.norm(mean, axis=1), 1e-12)[:, None]
+            found |= np.einsum("ij,ij->i", mean, directions) > 1.0 - 1e-9
+    return bool(found.all())
 
 
 def contact_arrays(contacts: Sequence[Contact]) -> tuple[FloatArray, FloatArray, FloatArray]:
@@ -545,6 +562,7 @@ def merge_plane_arrays(
             merge_deg,
             cone if quantised else 0.0,
             noise,
+            merge_cone=cone,
         )
     if include_table and not any(
         f.normal[2] < -math.cos(math.radians(merge_deg)) and abs(f.offset) <= tol for f in faces
@@ -563,6 +581,7 @@ def _faces_from_contacts(
     merge_deg: float,
     cone: float,
     noise: float = 0.0,
+    merge_cone: float = 0.0,
 ) -> list[Face]:
     centres, directions, points = arrays
     normals = -directions
@@ -584,20 +603,28 @@ def _faces_from_contacts(
     groups: list[NDArray[np.intp]] = []
     for lab in np.unique(labels):
         groups += _split(keep[labels == lab], centres, normals, span_min, tol, fit)
-    groups = _merge_coplanar(groups, fit, tol, merge_deg)
+    groups = _merge_coplanar(groups, fit, tol, merge_deg, merge_cone, centres, scale)
     groups.sort(key=lambda g: int(g.min()))
     index = (
         np.arange(chosen.start, chosen.stop, chosen.step)
         if isinstance(chosen, range)
         else np.asarray(chosen)
     )
+    # the surface's own detail (a scan's bumps and ripples) from the faces touched often
+    # enough to show it: the median scatter of their centres about their planes
+    rough = [
+        math.sqrt(_sse(f) / (len(g) - 3))
+        for g in groups
+        if len(g) >= _ROUGH_MIN and (f := fit(g)).refined
+    ]
+    detail = float(np.median(rough)) if rough else 0.0
     out = []
     for g in groups:
         f = fit(g)
         m = len(g)
         sigma = math.sqrt(_sse(f) / max(m - 3 if f.refined else m - 1, 1))
-        if m <= 4:  # three or four centres fit a plane (nearly) exactly: trust the noise
-            sigma = max(sigma, noise)
+        if m <= 4:  # three or four centres fit a plane (nearly) exactly: trust the noise,
+            sigma = max(sigma, noise, detail)  # or the detail the other faces show
         if f.refined:
             unc = math.degrees(math.atan2(sigma, f.span * math.sqrt(m)))
         else:
@@ -633,25 +660,69 @@ def _finger(directions: tuple[Vec3, ...]) -> tuple[FloatArray, float, float]:
 
 
 def _merge_coplanar(
-    groups: list[NDArray[np.intp]], fit: FitFn, tol: float, merge_deg: float
+    groups: list[NDArray[np.intp]],
+    fit: FitFn,
+    tol: float,
+    merge_deg: float,
+    cone: float = 0.0,
+    centres: FloatArray | None = None,
+    scale: float = 0.0,
 ) -> list[NDArray[np.intp]]:
-    """Merge groups whose fitted planes coincide (normals within ``merge_deg``, one plane fits)."""
+    """Merge groups whose fitted planes coincide (normals within ``merge_deg``, one plane fits).
+
+    A group whose centres do not span a plane (touched at one spot or along one line) has the
+    sensors' normal, quantised to within ``cone`` degrees (a scanned face's bump makes a
+    neighbouring sensor fire, or two together, which give their mean): it merges with another
+    group when the normals differ by less than ``geometry.unrefined_merge_cones`` × ``cone``,
+    the centres of both span one plane, that plane is the spanning group's (within
+    ``merge_deg``; with two groups that span none, within the same loose angle of both), and
+    the other group's centres lie on it within ``geometry.unrefined_merge_sigmas`` × the
+    spanning group's scatter (at least ``scale``, the robust fits' least scale), by their
+    median: they are on one face, and their sensors' tilt is the quantisation or the
+    surface's detail, not another face."""
     cos_min = math.cos(math.radians(merge_deg))
+    loose = max(merge_deg, current().geometry.unrefined_merge_cones * cone)
+    if centres is None:
+        loose = merge_deg
+    cos_loose = math.cos(math.radians(loose))
     changed = True
     while changed and len(groups) > 1:
         changed = False
         fits = [fit(g) for g in groups]
         normals = np.asarray([f.normal for f in fits])
+        refined = np.asarray([f.refined for f in fits])
+        cos = normals @ normals.T
         # candidate pairs (i < j, row by row) from one matrix product, each confirmed below
-        near = np.triu(normals @ normals.T >= cos_min - 1e-9, 1)
+        unspanned = ~(refined[:, None] & refined[None, :])
+        near = np.triu((cos >= cos_min - 1e-9) | (unspanned & (cos >= cos_loose - 1e-9)), 1)
         for i, j in zip(*np.nonzero(near), strict=True):
-            if fits[i].normal @ fits[j].normal < cos_min:
-                continue
             both = np.concatenate([groups[i], groups[j]])
-            if fit(both).max_res <= tol:
-                groups = [g for k, g in enumerate(groups) if k not in (i, j)] + [both]
-                changed = True
-                break
+            joint = fit(both)
+            if joint.max_res > tol:
+                continue
+            if fits[i].normal @ fits[j].normal < cos_min:
+                if not joint.refined or centres is None:
+                    continue
+                spanning = [fits[k] for k in (i, j) if fits[k].refined]
+                line = groups[j] if fits[i].refined else groups[i]
+                if spanning:  # the plane is the spanning group's
+                    if joint.normal @ spanning[0].normal < cos_min:
+                        continue
+                    scatter = max(scale, _mad_sigma(spanning[0].residuals))
+                else:  # two lines (or spots) that together span a plane near both normals
+                    if min(joint.normal @ fits[i].normal, joint.normal @ fits[j].normal) < (
+                        cos_loose
+                    ):
+                        continue
+                    scatter, line = scale, both
+                # the other group's centres on that plane, as close as a face's own lie to it
+                # (their median: a bump under one of them is the surface's detail)
+                off = np.abs(centres[line] @ joint.normal - joint.centre_offset)
+                if float(np.median(off)) > current().geometry.unrefined_merge_sigmas * scatter:
+                    continue
+            groups = [g for k, g in enumerate(groups) if k not in (i, j)] + [both]
+            changed = True
+            break
     return groups
 
 
