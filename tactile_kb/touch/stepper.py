@@ -41,6 +41,7 @@ import copy
 import itertools
 import math
 from collections.abc import Iterator, Sequence
+from dataclasses import dataclass
 
 import numpy as np
 import trimesh
@@ -111,6 +112,29 @@ def _closest(
         edge_q = np.where(closer[:, None], q, edge_q)
     out: FloatArray = np.where(inside[:, None], proj, edge_q)
     return out, inside
+
+
+@dataclass(frozen=True)
+class _Prims:
+    """The radius-independent terms of :meth:`StepperWorld._intervals` for one line: vertices
+    (``vb`` = w·u, ``vww`` = |w|²), edges (the cylinder's quadratic without its radius, the
+    slab of the edge's length) and triangles (the plane's offset and rate, and the interval
+    inside the three sides)."""
+
+    vb: FloatArray
+    vww: FloatArray
+    aa: FloatArray
+    bb: FloatArray
+    wpwp: FloatArray
+    par: NDArray[np.bool_]
+    safe_a: FloatArray
+    slo: FloatArray
+    shi: FloatArray
+    s0: FloatArray
+    movn: NDArray[np.bool_]
+    safe_sd: FloatArray
+    side_lo: FloatArray
+    side_hi: FloatArray
 
 
 def _v3(a: Sequence[float] | FloatArray) -> Vec3:
@@ -185,6 +209,16 @@ class StepperWorld:
             self._er_max = float(0.5 * self._elen.max()) if len(self._elen) else 0.0
             self._vtree = cKDTree(self._verts)
         self._near: tuple[NDArray[np.intp], NDArray[np.intp], NDArray[np.intp]] | None = None
+        # contiguous copies of the triangles' corners and inward side normals
+        self._t0, self._t1, self._t2 = (np.ascontiguousarray(self._tri[:, k]) for k in range(3))
+        self._m0, self._m1, self._m2 = (np.ascontiguousarray(self._side_m[:, k]) for k in range(3))
+        self._pcache: list[
+            tuple[
+                tuple[bytes, bytes],
+                tuple[NDArray[np.intp], NDArray[np.intp], NDArray[np.intp]] | None,
+                _Prims,
+            ]
+        ] = []
         bounds = np.array(mesh.bounds, dtype=float)
         self._bounds = bounds
         self._workspace = workspace or default_workspace(bounds, self._rho)
@@ -218,6 +252,7 @@ class StepperWorld:
         the object or the table there raises :class:`~tactile_kb.errors.ExplorationError`.
         """
         out = copy.copy(self)
+        out._pcache = []
         out._orientation = orientation
         out._dirs = self._finger.directions_at(orientation)
         out._axis = np.asarray(orientation.axis, dtype=float)
@@ -380,26 +415,24 @@ class StepperWorld:
             near(self._vtree, pad),
         )
 
-    def _intervals(self, a: FloatArray, u: FloatArray, r: float) -> tuple[FloatArray, FloatArray]:
-        """Entry and exit parameters of the line a + t·u in every primitive of radius r (only
-        the primitives near the current motion's segment on a dense mesh)."""
-        tri, n, side_m = self._tri, self._n, self._side_m
-        e0, edir, elen, verts = self._e0, self._edir, self._elen, self._verts
+    def _primitives(self, a: FloatArray, u: FloatArray) -> _Prims:
+        """The parts of :meth:`_intervals` that do not depend on the radius, for the line
+        a + t·u and the current candidates (kept for the few radii one motion asks about)."""
+        key = (a.tobytes(), u.tobytes())
+        for k, near, prims in self._pcache:
+            if k == key and near is self._near:
+                return prims
+        t0, t1, t2 = self._t0, self._t1, self._t2
+        m0, m1, m2 = self._m0, self._m1, self._m2
+        n, e0, edir, elen, verts = self._n, self._e0, self._edir, self._elen, self._verts
         if self._near is not None:
             ti, ei, vi = self._near
-            tri, n, side_m = tri[ti], n[ti], side_m[ti]
+            t0, t1, t2, m0, m1, m2, n = t0[ti], t1[ti], t2[ti], m0[ti], m1[ti], m2[ti], n[ti]
             e0, edir, elen, verts = e0[ei], edir[ei], elen[ei], verts[vi]
-        los: list[FloatArray] = []
-        his: list[FloatArray] = []
         # vertices: |a - v + t u|^2 = r^2
         w = a - verts
-        b = w @ u
-        c = np.einsum("ij,ij->i", w, w) - r * r
-        disc = b * b - c
-        ok = disc > 0
-        sq = np.sqrt(np.where(ok, disc, 0.0))
-        los.append(np.where(ok, -b - sq, np.inf))
-        his.append(np.where(ok, -b + sq, -np.inf))
+        vb = w @ u
+        vww = np.einsum("ij,ij->i", w, w)
         # edges: infinite cylinder clipped by the slab 0 <= s <= len
         w = a - e0
         we = np.einsum("ij,ij->i", w, edir)
@@ -408,56 +441,87 @@ class StepperWorld:
         up = u - ue[:, None] * edir
         aa = np.einsum("ij,ij->i", up, up)
         bb = np.einsum("ij,ij->i", wp, up)
-        cc = np.einsum("ij,ij->i", wp, wp) - r * r
+        wpwp = np.einsum("ij,ij->i", wp, wp)
         par = aa < 1e-14
-        disc = bb * bb - aa * cc
-        okc = (disc > 0) & ~par
-        sq = np.sqrt(np.where(okc, disc, 0.0))
         safe_a = np.where(par, 1.0, aa)
-        lo = np.where(okc, (-bb - sq) / safe_a, np.inf)
-        hi = np.where(okc, (-bb + sq) / safe_a, -np.inf)
-        inside_par = par & (cc < 0)
-        lo = np.where(inside_par, -np.inf, lo)
-        hi = np.where(inside_par, np.inf, hi)
         moving = np.abs(ue) > 1e-14
         safe_ue = np.where(moving, ue, 1.0)
         s1 = -we / safe_ue
         s2 = (elen - we) / safe_ue
-        slo = np.where(
-            moving, np.minimum(s1, s2), np.where((we >= 0) & (we <= elen), -np.inf, np.inf)
-        )
-        shi = np.where(
-            moving, np.maximum(s1, s2), np.where((we >= 0) & (we <= elen), np.inf, -np.inf)
-        )
-        los.append(np.maximum(lo, slo))
-        his.append(np.minimum(hi, shi))
-        # triangles: |s(t)| <= r and the projection inside the triangle
-        w = a - tri[:, 0]
-        s0 = np.einsum("ij,ij->i", w, n)
+        within = (we >= 0) & (we <= elen)
+        slo = np.where(moving, np.minimum(s1, s2), np.where(within, -np.inf, np.inf))
+        shi = np.where(moving, np.maximum(s1, s2), np.where(within, np.inf, -np.inf))
+        # triangles: the plane's slab, and the projection inside the three sides
+        s0 = np.einsum("ij,ij->i", a - t0, n)
         sd = n @ u
         movn = np.abs(sd) > 1e-14
         safe_sd = np.where(movn, sd, 1.0)
-        t1 = (-r - s0) / safe_sd
-        t2 = (r - s0) / safe_sd
-        inside = np.abs(s0) < r
-        lo = np.where(movn, np.minimum(t1, t2), np.where(inside, -np.inf, np.inf))
-        hi = np.where(movn, np.maximum(t1, t2), np.where(inside, np.inf, -np.inf))
-        for k in range(3):
-            m = side_m[:, k]
-            g0 = np.einsum("ij,ij->i", a - tri[:, k], m)
+        side_lo = np.full(len(s0), -np.inf)
+        side_hi = np.full(len(s0), np.inf)
+        bad = np.zeros(len(s0), dtype=bool)
+        for v, m in ((t0, m0), (t1, m1), (t2, m2)):
+            g0 = np.einsum("ij,ij->i", a - v, m)
             gd = m @ u
             mv = np.abs(gd) > 1e-14
             safe_gd = np.where(mv, gd, 1.0)
             root = -g0 / safe_gd
             # g0 + t gd >= 0
-            lo = np.where(mv & (gd > 0), np.maximum(lo, root), lo)
-            hi = np.where(mv & (gd < 0), np.minimum(hi, root), hi)
-            bad = ~mv & (g0 < 0)
-            lo = np.where(bad, np.inf, lo)
-            hi = np.where(bad, -np.inf, hi)
-        los.append(lo)
-        his.append(hi)
-        return np.concatenate(los), np.concatenate(his)
+            side_lo = np.where(mv & (gd > 0), np.maximum(side_lo, root), side_lo)
+            side_hi = np.where(mv & (gd < 0), np.minimum(side_hi, root), side_hi)
+            bad |= ~mv & (g0 < 0)
+        keep = ~bad  # a line outside a side, parallel to it, never meets the triangle
+        prims = _Prims(
+            vb=vb,
+            vww=vww,
+            aa=aa,
+            bb=bb,
+            wpwp=wpwp,
+            par=par,
+            safe_a=safe_a,
+            slo=slo,
+            shi=shi,
+            s0=s0[keep],
+            movn=movn[keep],
+            safe_sd=safe_sd[keep],
+            side_lo=side_lo[keep],
+            side_hi=side_hi[keep],
+        )
+        if len(self._pcache) >= 4:
+            del self._pcache[0]
+        self._pcache.append((key, self._near, prims))
+        return prims
+
+    def _intervals(self, a: FloatArray, u: FloatArray, r: float) -> tuple[FloatArray, FloatArray]:
+        """Entry and exit parameters of the line a + t·u in the primitives of radius r (only
+        the primitives near the current motion's segment on a dense mesh; triangles the line
+        cannot meet at any radius are left out)."""
+        p = self._primitives(a, u)
+        rr = r * r
+        # vertices
+        disc = p.vb * p.vb - (p.vww - rr)
+        ok = disc > 0
+        sq = np.sqrt(np.where(ok, disc, 0.0))
+        vlo = np.where(ok, -p.vb - sq, np.inf)
+        vhi = np.where(ok, -p.vb + sq, -np.inf)
+        # edges
+        cc = p.wpwp - rr
+        disc = p.bb * p.bb - p.aa * cc
+        okc = (disc > 0) & ~p.par
+        sq = np.sqrt(np.where(okc, disc, 0.0))
+        lo = np.where(okc, (-p.bb - sq) / p.safe_a, np.inf)
+        hi = np.where(okc, (-p.bb + sq) / p.safe_a, -np.inf)
+        inside_par = p.par & (cc < 0)
+        elo = np.maximum(np.where(inside_par, -np.inf, lo), p.slo)
+        ehi = np.minimum(np.where(inside_par, np.inf, hi), p.shi)
+        # triangles: |s(t)| <= r and the projection inside the triangle
+        t1 = (-r - p.s0) / p.safe_sd
+        t2 = (r - p.s0) / p.safe_sd
+        inside = np.abs(p.s0) < r
+        lo = np.where(p.movn, np.minimum(t1, t2), np.where(inside, -np.inf, np.inf))
+        hi = np.where(p.movn, np.maximum(t1, t2), np.where(inside, np.inf, -np.inf))
+        tlo = np.maximum(lo, p.side_lo)
+        thi = np.minimum(hi, p.side_hi)
+        return np.concatenate([vlo, elo, tlo]), np.concatenate([vhi, ehi, thi])
 
     def _block_at(self, a: FloatArray, u: FloatArray, limit: float) -> float:
         """Where along the segment the tip would start to penetrate (``inf`` if nowhere)."""
@@ -559,12 +623,14 @@ class StepperWorld:
         fired0 = self._fired(a)
         room = self._workspace.room(_v3(a), _v3(u))
         reach = min(float(length), room)
+        self._pcache.clear()
         if self._dense:
             self._near = self._near_segment(a, u, reach, self._rho + current().world.contact_tol)
         try:
             return self._run_near(kind, a, u, length, fired0, room, reach)
         finally:
             self._near = None
+            self._pcache.clear()
 
     def _run_near(
         self,
