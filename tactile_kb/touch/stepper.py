@@ -404,10 +404,12 @@ class StepperWorld:
         pad = r + 0.5 * step + 1e-9
 
         def near(tree: cKDTree, radius: float) -> NDArray[np.intp]:
-            found = tree.query_ball_point(pts, radius)
-            if len(found) == 0:
-                return np.zeros(0, dtype=np.intp)
-            return np.unique(np.fromiter(itertools.chain.from_iterable(found), dtype=np.intp))
+            # the union of the balls' indices, in increasing order (a mask, not a sort)
+            found = tree.query_ball_point(pts, radius, return_sorted=False)
+            mask = np.zeros(tree.n, dtype=bool)
+            mask[np.fromiter(itertools.chain.from_iterable(found), dtype=np.intp)] = True
+            out: NDArray[np.intp] = np.flatnonzero(mask)
+            return out
 
         return (
             near(self._tree, pad + self._tr_max),
