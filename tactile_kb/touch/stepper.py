@@ -73,6 +73,7 @@ _NUDGE = 1e-8  # how far past a change the motion stops, so the new state holds 
 _EPS_T = 1e-12
 _BATCH = 48  # sensor states evaluated together along a motion
 _DENSE_STRIDE = 8  # on a dense mesh, sensor states are first sampled every 8th gap
+_CONTACT_CACHE = 64  # single-point contact sets kept (see StepperWorld._contacts)
 
 DENSE_FACES = 4000
 """Meshes with more triangles than this are searched through k-d trees: a motion meets only the
@@ -190,6 +191,9 @@ class StepperWorld:
         self._tr = np.linalg.norm(self._tri - self._tc[:, None, :], axis=2).max(axis=1)
         self._tr_max = float(self._tr.max()) if len(self._tr) else 0.0
         self._tree = cKDTree(self._tc)
+        flat = np.abs(np.einsum("ijk,ik->ij", self._tri - self._tc[:, None, :], self._n))
+        # (F, 8): what _may_touch reads, in one gather
+        self._pre = np.column_stack([self._tc, self._n, self._tr, flat.max(axis=1) + 1e-12])
         # inward side normals of each triangle: n × (vj − vi)
         self._side_m = np.stack(
             [np.cross(self._n, self._tri[:, (k + 1) % 3] - self._tri[:, k]) for k in range(3)],
@@ -212,6 +216,7 @@ class StepperWorld:
         # contiguous copies of the triangles' corners and inward side normals
         self._t0, self._t1, self._t2 = (np.ascontiguousarray(self._tri[:, k]) for k in range(3))
         self._m0, self._m1, self._m2 = (np.ascontiguousarray(self._side_m[:, k]) for k in range(3))
+        self._ccache: dict[tuple[bytes, float, float], FloatArray] = {}
         self._pcache: list[
             tuple[
                 tuple[bytes, bytes],
@@ -342,9 +347,8 @@ class StepperWorld:
         found = self._tree.query_ball_point(pts, r + self._tr_max + 1e-9, return_sorted=False)
         pi = np.repeat(np.arange(len(pts)), [len(f) for f in found])
         ti = np.fromiter(itertools.chain.from_iterable(found), dtype=np.intp, count=len(pi))
-        if len(pi):  # bounding spheres: a triangle further than its radius + r cannot touch
-            near = np.linalg.norm(pts[pi] - self._tc[ti], axis=1) - self._tr[ti] <= r + 1e-9
-            pi, ti = pi[near], ti[near]
+        if len(pi):  # a lower bound of the distance: only triangles that can touch go on
+            pi, ti = self._may_touch(pts, pi, ti, r + 1e-9)
         if len(pi) == 0:
             return pi, np.zeros((0, 3))
         q, inside = _closest(self._tri[ti], self._n[ti], self._side_m[ti], pts[pi])
@@ -363,9 +367,46 @@ class StepperWorld:
             pi, u = pi[keep], u[keep]
         return pi, u
 
+    def _may_touch(
+        self, pts: FloatArray, pi: NDArray[np.intp], ti: NDArray[np.intp], r: float
+    ) -> tuple[NDArray[np.intp], NDArray[np.intp]]:
+        """The pairs (point ``pi``, triangle ``ti``) whose distance can be ≤ ``r``, in order.
+
+        Triangle ``t`` lies in the disc of radius ``tr`` about its centroid ``tc`` in the
+        plane of normal ``n``, thickened by ``flat`` (how far its corners are from that plane
+        in floating point). With ``s`` the point's height over that plane and ``l`` its
+        distance from ``tc`` along it, the distance is at least
+        ``hypot(max(|s| − flat, 0), max(l − tr, 0))``: a pair further than ``r`` by that
+        bound cannot touch, whatever the exact closest point (a conservative test that keeps
+        the order of the pairs).
+        """
+        pre = self._pre[ti]  # (k, 8): tc, n, tr, flat
+        dv = pts[pi] - pre[:, 0:3]
+        s = np.abs(np.einsum("ij,ij->i", dv, pre[:, 3:6]))
+        d2 = np.einsum("ij,ij->i", dv, dv)
+        h = np.maximum(s - pre[:, 7], 0.0)
+        lat = np.maximum(np.sqrt(np.maximum(d2 - s * s, 0.0)) - pre[:, 6], 0.0)
+        near = h * h + lat * lat <= r * r
+        return pi[near], ti[near]
+
     def _contacts(self, p: FloatArray) -> FloatArray:
-        """Unit directions from ``p`` to the surface within ρ + CONTACT_TOL, (k, 3)."""
-        return self._touching(np.asarray(p, dtype=float).reshape(1, 3))[1]
+        """Unit directions from ``p`` to the surface within ρ + CONTACT_TOL, (k, 3).
+
+        A motion starts where the last one ended and asks there again: the last few answers
+        are kept (read-only), by the exact coordinates and the tolerances that decide them.
+        """
+        pt = np.asarray(p, dtype=float).reshape(1, 3)
+        world = current().world
+        key = (pt.tobytes(), world.contact_tol, world.same_contact_deg)
+        hit = self._ccache.get(key)
+        if hit is not None:
+            return hit
+        out = self._touching(pt)[1]
+        out.flags.writeable = False
+        if len(self._ccache) >= _CONTACT_CACHE:
+            del self._ccache[next(iter(self._ccache))]
+        self._ccache[key] = out
+        return out
 
     def _fired(self, p: FloatArray) -> tuple[int, ...]:
         d = self._contacts(p)
