@@ -85,34 +85,56 @@ SAME_CONTACT_DEG = DEFAULTS.world.same_contact_deg
 is the same contact (see :meth:`StepperWorld._touching`)."""
 
 
-def _closest(
-    tri: FloatArray, normals: FloatArray, sides: FloatArray, points: FloatArray
-) -> tuple[FloatArray, NDArray[np.bool_]]:
-    """The closest point of each triangle (K, 3, 3) to the matching point (K, 3), and whether
-    it lies inside the triangle (not on a side).
+def _closest(pk: FloatArray, points: FloatArray) -> tuple[FloatArray, NDArray[np.bool_]]:
+    """The closest point of each triangle to the matching point (K, 3), and whether it lies
+    inside the triangle (not on a side).
 
-    ``normals`` (K, 3) are the triangles' unit normals and ``sides`` (K, 3, 3) their inward side
-    normals ``n × (v[k+1] − v[k])``. The closest point is the projection onto the triangle's
-    plane when it falls inside the triangle, else the nearest point of its three sides (the
-    same points as ``trimesh.triangles.closest_point``, which does not say which case it was).
+    ``pk`` (K, 33) holds each triangle's corners v0, v1, v2, unit normal n, inward side
+    normals ``n × (v[k+1] − v[k])``, sides ``v[k+1] − v[k]`` and their squared lengths (see
+    :class:`StepperWorld`). The closest point is the projection onto the triangle's plane
+    when it falls inside the triangle, else the nearest point of its three sides (the same
+    points as ``trimesh.triangles.closest_point``, which does not say which case it was).
     """
-    v0 = tri[:, 0]
-    proj = points - np.einsum("ij,ij->i", points - v0, normals)[:, None] * normals
+    normals = pk[:, 9:12]
+    proj = points - np.einsum("ij,ij->i", points - pk[:, 0:3], normals)[:, None] * normals
     inside = np.ones(len(points), dtype=bool)
     best = np.full(len(points), np.inf)
     edge_q = np.zeros_like(points)
     for k in range(3):
-        a = tri[:, k]
-        ab = tri[:, (k + 1) % 3] - a
-        inside &= np.einsum("ij,ij->i", sides[:, k], proj - a) >= 0.0
-        t = np.clip(np.einsum("ij,ij->i", points - a, ab) / np.einsum("ij,ij->i", ab, ab), 0, 1)
+        a = pk[:, 3 * k : 3 * k + 3]
+        ab = pk[:, 21 + 3 * k : 24 + 3 * k]
+        inside &= np.einsum("ij,ij->i", pk[:, 12 + 3 * k : 15 + 3 * k], proj - a) >= 0.0
+        t = np.clip(np.einsum("ij,ij->i", points - a, ab) / pk[:, 30 + k], 0, 1)
         q = a + t[:, None] * ab
-        d = np.einsum("ij,ij->i", points - q, points - q)
+        dq = points - q
+        d = np.einsum("ij,ij->i", dq, dq)
         closer = d < best
         best = np.where(closer, d, best)
         edge_q = np.where(closer[:, None], q, edge_q)
     out: FloatArray = np.where(inside[:, None], proj, edge_q)
     return out, inside
+
+
+def _sq(x: FloatArray) -> FloatArray:
+    """Squared lengths of the rows of ``x`` (K, 3), summed in the order ``np.linalg.norm`` sums."""
+    out: FloatArray = x[:, 0] * x[:, 0] + x[:, 1] * x[:, 1] + x[:, 2] * x[:, 2]
+    return out
+
+
+def _norms(x: FloatArray) -> FloatArray:
+    """Lengths of the rows of ``x`` (K, 3), as ``np.linalg.norm(x, axis=1)``."""
+    out: FloatArray = np.sqrt(_sq(x))
+    return out
+
+
+def _unique_edges(faces: NDArray[np.int64], nv: int) -> NDArray[np.int64]:
+    """The undirected edges of ``faces`` (F, 3), once each, as (E, 2) sorted vertex pairs."""
+    ends = faces[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2)
+    keys = np.minimum(ends[:, 0], ends[:, 1]) * nv + np.maximum(ends[:, 0], ends[:, 1])
+    keys.sort()
+    keys = keys[np.concatenate(([True], keys[1:] != keys[:-1]))]
+    out: NDArray[np.int64] = np.column_stack([keys // nv, keys % nv])
+    return out
 
 
 @dataclass(frozen=True)
@@ -180,42 +202,57 @@ class StepperWorld:
         self._cos = finger.cos_cone
         v = np.array(mesh.vertices, dtype=float)
         f = np.array(mesh.faces, dtype=np.int64)
-        self._tri = v[f]  # (F, 3, 3)
-        normals = np.cross(self._tri[:, 1] - self._tri[:, 0], self._tri[:, 2] - self._tri[:, 0])
-        lengths = np.linalg.norm(normals, axis=1)
+        tri = v[f]  # (F, 3, 3)
+        normals = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
+        lengths = _norms(normals)
         keep = lengths > 1e-18
-        self._tri, normals, lengths = self._tri[keep], normals[keep], lengths[keep]
+        tri, normals, lengths = tri[keep], normals[keep], lengths[keep]
         self._n = normals / lengths[:, None]
         # bounding spheres of the triangles: a conservative pre-filter for closest points
-        self._tc = self._tri.mean(axis=1)
-        self._tr = np.linalg.norm(self._tri - self._tc[:, None, :], axis=2).max(axis=1)
+        self._tc = (tri[:, 0] + tri[:, 1] + tri[:, 2]) / 3.0
+        rel = tri - self._tc[:, None, :]
+        self._tr = np.sqrt(
+            np.maximum.reduce([_sq(rel[:, 0]), _sq(rel[:, 1]), _sq(rel[:, 2])])
+        )  # the furthest corner
         self._tr_max = float(self._tr.max()) if len(self._tr) else 0.0
         self._tree = cKDTree(self._tc)
-        flat = np.abs(np.einsum("ijk,ik->ij", self._tri - self._tc[:, None, :], self._n))
+        flat = np.abs(np.einsum("ijk,ik->ij", rel, self._n)).max(axis=1) + 1e-12
         # (F, 8): what _may_touch reads, in one gather
-        self._pre = np.column_stack([self._tc, self._n, self._tr, flat.max(axis=1) + 1e-12])
-        # inward side normals of each triangle: n × (vj − vi)
-        self._side_m = np.stack(
-            [np.cross(self._n, self._tri[:, (k + 1) % 3] - self._tri[:, k]) for k in range(3)],
-            axis=1,
-        )  # (F, 3, 3)
-        edges = np.asarray(mesh.edges_unique, dtype=np.int64)
+        self._pre = np.column_stack([self._tc, self._n, self._tr, flat])
+        # (F, 33): what _closest reads, in one gather: each triangle's corners v0, v1, v2, its
+        # normal, inward side normals n × (v[k+1] − v[k]), sides v[k+1] − v[k] and their squares
+        pk = np.empty((len(tri), 33))
+        pk[:, 0:9] = tri.reshape(-1, 9)
+        pk[:, 9:12] = self._n
+        for k in range(3):
+            side = np.subtract(
+                pk[:, 3 * ((k + 1) % 3) : 3 * ((k + 1) % 3) + 3], pk[:, 3 * k : 3 * k + 3]
+            )
+            pk[:, 21 + 3 * k : 24 + 3 * k] = side
+            pk[:, 12 + 3 * k : 15 + 3 * k] = np.cross(self._n, side)
+            pk[:, 30 + k] = np.einsum("ij,ij->i", side, side)
+        self._pk = pk
+        self._t0, self._t1, self._t2 = pk[:, 0:3], pk[:, 3:6], pk[:, 6:9]
+        self._m0, self._m1, self._m2 = pk[:, 12:15], pk[:, 15:18], pk[:, 18:21]
+        edges = _unique_edges(f, len(v))
         self._e0 = v[edges[:, 0]]
         evec = v[edges[:, 1]] - self._e0
-        self._elen = np.linalg.norm(evec, axis=1)
+        self._elen = _norms(evec)
         ok = self._elen > 1e-15
         self._e0, evec, self._elen = self._e0[ok], evec[ok], self._elen[ok]
         self._edir = evec / self._elen[:, None]
-        self._verts = v[np.unique(f)]
-        self._dense = len(self._tri) > DENSE_FACES
-        if self._dense:  # primitives near a segment, found through their centres
-            self._etree = cKDTree(self._e0 + 0.5 * self._elen[:, None] * self._edir)
+        self._verts = v[np.flatnonzero(np.bincount(f.ravel(), minlength=len(v)))]
+        self._dense = len(self._n) > DENSE_FACES
+        if self._dense:  # primitives near a segment, found through their centres (the union
+            # of balls does not depend on how a tree is built, so these are built fast)
+            self._etree = cKDTree(
+                self._e0 + 0.5 * self._elen[:, None] * self._edir,
+                balanced_tree=False,
+                compact_nodes=False,
+            )
             self._er_max = float(0.5 * self._elen.max()) if len(self._elen) else 0.0
-            self._vtree = cKDTree(self._verts)
+            self._vtree = cKDTree(self._verts, balanced_tree=False, compact_nodes=False)
         self._near: tuple[NDArray[np.intp], NDArray[np.intp], NDArray[np.intp]] | None = None
-        # contiguous copies of the triangles' corners and inward side normals
-        self._t0, self._t1, self._t2 = (np.ascontiguousarray(self._tri[:, k]) for k in range(3))
-        self._m0, self._m1, self._m2 = (np.ascontiguousarray(self._side_m[:, k]) for k in range(3))
         self._ccache: dict[tuple[bytes, float, float], FloatArray] = {}
         self._pcache: list[
             tuple[
@@ -351,7 +388,7 @@ class StepperWorld:
             pi, ti = self._may_touch(pts, pi, ti, r + 1e-9)
         if len(pi) == 0:
             return pi, np.zeros((0, 3))
-        q, inside = _closest(self._tri[ti], self._n[ti], self._side_m[ti], pts[pi])
+        q, inside = _closest(self._pk[ti], pts[pi])
         d = q - pts[pi]
         dist = np.linalg.norm(d, axis=1)
         ok = (dist <= r) & (dist > 1e-12)
@@ -430,7 +467,7 @@ class StepperWorld:
     def distance(self, centre: Vec3) -> float:
         """Distance from ``centre`` to the mesh surface (for tests and diagnostics)."""
         p = np.asarray(centre, dtype=float)
-        q, _ = _closest(self._tri, self._n, self._side_m, np.tile(p, (len(self._tri), 1)))
+        q, _ = _closest(self._pk, np.tile(p, (len(self._pk), 1)))
         return float(np.linalg.norm(q - p, axis=1).min())
 
     # interval algebra ---------------------------------------------------------------------------
