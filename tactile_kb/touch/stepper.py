@@ -85,16 +85,39 @@ SAME_CONTACT_DEG = DEFAULTS.world.same_contact_deg
 is the same contact (see :meth:`StepperWorld._touching`)."""
 
 
-def _closest(pk: FloatArray, points: FloatArray) -> tuple[FloatArray, NDArray[np.bool_]]:
-    """The closest point of each triangle to the matching point (K, 3), and whether it lies
-    inside the triangle (not on a side).
+def _pack(tri: FloatArray, normals: FloatArray, sides: FloatArray | None = None) -> FloatArray:
+    """(K, 33) rows of what :func:`_closest_packed` reads about the triangles ``tri`` (K, 3, 3)
+    with unit ``normals`` (K, 3): the corners v0, v1, v2, the normal, the inward side normals
+    ``n × (v[k+1] − v[k])`` (``sides`` (K, 3, 3) when given), the sides ``v[k+1] − v[k]``
+    and their squared lengths."""
+    pk = np.empty((len(tri), 33))
+    pk[:, 0:9] = tri.reshape(-1, 9)
+    pk[:, 9:12] = normals
+    for k in range(3):
+        j = (k + 1) % 3
+        side = np.subtract(pk[:, 3 * j : 3 * j + 3], pk[:, 3 * k : 3 * k + 3])
+        pk[:, 21 + 3 * k : 24 + 3 * k] = side
+        pk[:, 12 + 3 * k : 15 + 3 * k] = np.cross(normals, side) if sides is None else sides[:, k]
+        pk[:, 30 + k] = np.einsum("ij,ij->i", side, side)
+    return pk
 
-    ``pk`` (K, 33) holds each triangle's corners v0, v1, v2, unit normal n, inward side
-    normals ``n × (v[k+1] − v[k])``, sides ``v[k+1] − v[k]`` and their squared lengths (see
-    :class:`StepperWorld`). The closest point is the projection onto the triangle's plane
-    when it falls inside the triangle, else the nearest point of its three sides (the same
-    points as ``trimesh.triangles.closest_point``, which does not say which case it was).
+
+def _closest(
+    tri: FloatArray, normals: FloatArray, sides: FloatArray, points: FloatArray
+) -> tuple[FloatArray, NDArray[np.bool_]]:
+    """The closest point of each triangle (K, 3, 3) to the matching point (K, 3), and whether
+    it lies inside the triangle (not on a side).
+
+    ``normals`` (K, 3) are the triangles' unit normals and ``sides`` (K, 3, 3) their inward side
+    normals ``n × (v[k+1] − v[k])``. The closest point is the projection onto the triangle's
+    plane when it falls inside the triangle, else the nearest point of its three sides (the
+    same points as ``trimesh.triangles.closest_point``, which does not say which case it was).
     """
+    return _closest_packed(_pack(tri, normals, sides), points)
+
+
+def _closest_packed(pk: FloatArray, points: FloatArray) -> tuple[FloatArray, NDArray[np.bool_]]:
+    """:func:`_closest` of the triangles packed by :func:`_pack` (one gather per query)."""
     normals = pk[:, 9:12]
     proj = points - np.einsum("ij,ij->i", points - pk[:, 0:3], normals)[:, None] * normals
     inside = np.ones(len(points), dtype=bool)
@@ -219,18 +242,7 @@ class StepperWorld:
         flat = np.abs(np.einsum("ijk,ik->ij", rel, self._n)).max(axis=1) + 1e-12
         # (F, 8): what _may_touch reads, in one gather
         self._pre = np.column_stack([self._tc, self._n, self._tr, flat])
-        # (F, 33): what _closest reads, in one gather: each triangle's corners v0, v1, v2, its
-        # normal, inward side normals n × (v[k+1] − v[k]), sides v[k+1] − v[k] and their squares
-        pk = np.empty((len(tri), 33))
-        pk[:, 0:9] = tri.reshape(-1, 9)
-        pk[:, 9:12] = self._n
-        for k in range(3):
-            side = np.subtract(
-                pk[:, 3 * ((k + 1) % 3) : 3 * ((k + 1) % 3) + 3], pk[:, 3 * k : 3 * k + 3]
-            )
-            pk[:, 21 + 3 * k : 24 + 3 * k] = side
-            pk[:, 12 + 3 * k : 15 + 3 * k] = np.cross(self._n, side)
-            pk[:, 30 + k] = np.einsum("ij,ij->i", side, side)
+        pk = _pack(tri, self._n)
         self._pk = pk
         self._t0, self._t1, self._t2 = pk[:, 0:3], pk[:, 3:6], pk[:, 6:9]
         self._m0, self._m1, self._m2 = pk[:, 12:15], pk[:, 15:18], pk[:, 18:21]
@@ -388,7 +400,7 @@ class StepperWorld:
             pi, ti = self._may_touch(pts, pi, ti, r + 1e-9)
         if len(pi) == 0:
             return pi, np.zeros((0, 3))
-        q, inside = _closest(self._pk[ti], pts[pi])
+        q, inside = _closest_packed(self._pk[ti], pts[pi])
         d = q - pts[pi]
         dist = np.linalg.norm(d, axis=1)
         ok = (dist <= r) & (dist > 1e-12)
@@ -467,7 +479,7 @@ class StepperWorld:
     def distance(self, centre: Vec3) -> float:
         """Distance from ``centre`` to the mesh surface (for tests and diagnostics)."""
         p = np.asarray(centre, dtype=float)
-        q, _ = _closest(self._pk, np.tile(p, (len(self._pk), 1)))
+        q, _ = _closest_packed(self._pk, np.tile(p, (len(self._pk), 1)))
         return float(np.linalg.norm(q - p, axis=1).min())
 
     # interval algebra ---------------------------------------------------------------------------
