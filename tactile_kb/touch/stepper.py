@@ -120,20 +120,17 @@ def _closest_packed(pk: FloatArray, points: FloatArray) -> tuple[FloatArray, NDA
     """:func:`_closest` of the triangles packed by :func:`_pack` (one gather per query)."""
     normals = pk[:, 9:12]
     proj = points - np.einsum("ij,ij->i", points - pk[:, 0:3], normals)[:, None] * normals
-    inside = np.ones(len(points), dtype=bool)
-    best = np.full(len(points), np.inf)
-    edge_q = np.zeros_like(points)
-    for k in range(3):
-        a = pk[:, 3 * k : 3 * k + 3]
-        ab = pk[:, 21 + 3 * k : 24 + 3 * k]
-        inside &= np.einsum("ij,ij->i", pk[:, 12 + 3 * k : 15 + 3 * k], proj - a) >= 0.0
-        t = np.clip(np.einsum("ij,ij->i", points - a, ab) / pk[:, 30 + k], 0, 1)
-        q = a + t[:, None] * ab
-        dq = points - q
-        d = np.einsum("ij,ij->i", dq, dq)
-        closer = d < best
-        best = np.where(closer, d, best)
-        edge_q = np.where(closer[:, None], q, edge_q)
+    corners = pk[:, 0:9].reshape(-1, 3, 3)
+    sides = pk[:, 21:30].reshape(-1, 3, 3)
+    inside = (
+        np.einsum("ikj,ikj->ik", pk[:, 12:21].reshape(-1, 3, 3), proj[:, None, :] - corners) >= 0.0
+    ).all(axis=1)
+    # the nearest point of each side (K, 3, 3), and the nearest side (the first of equals)
+    t = np.clip(np.einsum("ikj,ikj->ik", points[:, None, :] - corners, sides) / pk[:, 30:33], 0, 1)
+    q = corners + t[:, :, None] * sides
+    dq = points[:, None, :] - q
+    best = np.argmin(np.einsum("ikj,ikj->ik", dq, dq), axis=1)
+    edge_q = q[np.arange(len(q)), best]
     out: FloatArray = np.where(inside[:, None], proj, edge_q)
     return out, inside
 
@@ -244,8 +241,6 @@ class StepperWorld:
         self._pre = np.column_stack([self._tc, self._n, self._tr, flat])
         pk = _pack(tri, self._n)
         self._pk = pk
-        self._t0, self._t1, self._t2 = pk[:, 0:3], pk[:, 3:6], pk[:, 6:9]
-        self._m0, self._m1, self._m2 = pk[:, 12:15], pk[:, 15:18], pk[:, 18:21]
         edges = _unique_edges(f, len(v))
         self._e0 = v[edges[:, 0]]
         evec = v[edges[:, 1]] - self._e0
@@ -514,13 +509,10 @@ class StepperWorld:
         for k, near, prims in self._pcache:
             if k == key and near is self._near:
                 return prims
-        t0, t1, t2 = self._t0, self._t1, self._t2
-        m0, m1, m2 = self._m0, self._m1, self._m2
-        n, e0, edir, elen, verts = self._n, self._e0, self._edir, self._elen, self._verts
+        pk, e0, edir, elen, verts = self._pk, self._e0, self._edir, self._elen, self._verts
         if self._near is not None:
             ti, ei, vi = self._near
-            t0, t1, t2, m0, m1, m2, n = t0[ti], t1[ti], t2[ti], m0[ti], m1[ti], m2[ti], n[ti]
-            e0, edir, elen, verts = e0[ei], edir[ei], elen[ei], verts[vi]
+            pk, e0, edir, elen, verts = pk[ti], e0[ei], edir[ei], elen[ei], verts[vi]
         # vertices: |a - v + t u|^2 = r^2
         w = a - verts
         vb = w @ u
@@ -544,23 +536,20 @@ class StepperWorld:
         slo = np.where(moving, np.minimum(s1, s2), np.where(within, -np.inf, np.inf))
         shi = np.where(moving, np.maximum(s1, s2), np.where(within, np.inf, -np.inf))
         # triangles: the plane's slab, and the projection inside the three sides
-        s0 = np.einsum("ij,ij->i", a - t0, n)
+        n = pk[:, 9:12]
+        s0 = np.einsum("ij,ij->i", a - pk[:, 0:3], n)
         sd = n @ u
         movn = np.abs(sd) > 1e-14
         safe_sd = np.where(movn, sd, 1.0)
-        side_lo = np.full(len(s0), -np.inf)
-        side_hi = np.full(len(s0), np.inf)
-        bad = np.zeros(len(s0), dtype=bool)
-        for v, m in ((t0, m0), (t1, m1), (t2, m2)):
-            g0 = np.einsum("ij,ij->i", a - v, m)
-            gd = m @ u
-            mv = np.abs(gd) > 1e-14
-            safe_gd = np.where(mv, gd, 1.0)
-            root = -g0 / safe_gd
-            # g0 + t gd >= 0
-            side_lo = np.where(mv & (gd > 0), np.maximum(side_lo, root), side_lo)
-            side_hi = np.where(mv & (gd < 0), np.minimum(side_hi, root), side_hi)
-            bad |= ~mv & (g0 < 0)
+        corners = pk[:, 0:9].reshape(-1, 3, 3)
+        side_n = pk[:, 12:21].reshape(-1, 3, 3)
+        g0 = np.einsum("ikj,ikj->ik", a - corners, side_n)  # (K, 3): g0 + t gd >= 0 inside
+        gd = side_n @ u
+        mv = np.abs(gd) > 1e-14
+        root = -g0 / np.where(mv, gd, 1.0)
+        side_lo = np.where(mv & (gd > 0), root, -np.inf).max(axis=1)
+        side_hi = np.where(mv & (gd < 0), root, np.inf).min(axis=1)
+        bad = (~mv & (g0 < 0)).any(axis=1)
         keep = ~bad  # a line outside a side, parallel to it, never meets the triangle
         prims = _Prims(
             vb=vb,
