@@ -236,11 +236,12 @@ class StepperWorld:
         )  # the furthest corner
         self._tr_max = float(self._tr.max()) if len(self._tr) else 0.0
         self._tree = cKDTree(self._tc)
-        flat = np.abs(np.einsum("ijk,ik->ij", rel, self._n)).max(axis=1) + 1e-12
-        # (F, 8): what _may_touch reads, in one gather
-        self._pre = np.column_stack([self._tc, self._n, self._tr, flat])
-        pk = _pack(tri, self._n)
-        self._pk = pk
+        # rows read in one gather, filled when a triangle is first met (a dense mesh's
+        # exploration meets a fraction of them): (F, 8) for _may_touch, (F, 33) for the rest
+        self._tri = tri
+        self._pre = np.empty((len(tri), 8))
+        self._pk = np.empty((len(tri), 33))
+        self._filled = np.zeros(len(tri), dtype=bool)
         edges = _unique_edges(f, len(v))
         self._e0 = v[edges[:, 0]]
         evec = v[edges[:, 1]] - self._e0
@@ -259,6 +260,8 @@ class StepperWorld:
             )
             self._er_max = float(0.5 * self._elen.max()) if len(self._elen) else 0.0
             self._vtree = cKDTree(self._verts, balanced_tree=False, compact_nodes=False)
+        else:
+            self._fill(np.arange(len(tri)))
         self._near: tuple[NDArray[np.intp], NDArray[np.intp], NDArray[np.intp]] | None = None
         self._ccache: dict[tuple[bytes, float, float], FloatArray] = {}
         self._pcache: list[
@@ -272,6 +275,18 @@ class StepperWorld:
         self._bounds = bounds
         self._workspace = workspace or default_workspace(bounds, self._rho)
         self._hint = Box(lo=_v3(bounds[0] - hint_margin), hi=_v3(bounds[1] + hint_margin))
+
+    def _fill(self, ti: NDArray[np.intp]) -> None:
+        """Fill the packed rows of the triangles ``ti`` that are not filled yet."""
+        todo = ti[~self._filled[ti]]
+        if len(todo) == 0:
+            return
+        todo = np.unique(todo)
+        tri, n, tc = self._tri[todo], self._n[todo], self._tc[todo]
+        flat = np.abs(np.einsum("ijk,ik->ij", tri - tc[:, None, :], n)).max(axis=1) + 1e-12
+        self._pre[todo] = np.column_stack([tc, n, self._tr[todo], flat])
+        self._pk[todo] = _pack(tri, n)
+        self._filled[todo] = True
 
     # protocol attributes ------------------------------------------------------------------------
     @property
@@ -424,6 +439,7 @@ class StepperWorld:
         bound cannot touch, whatever the exact closest point (a conservative test that keeps
         the order of the pairs).
         """
+        self._fill(ti)
         pre = self._pre[ti]  # (k, 8): tc, n, tr, flat
         dv = pts[pi] - pre[:, 0:3]
         s = np.abs(np.einsum("ij,ij->i", dv, pre[:, 3:6]))
@@ -474,6 +490,7 @@ class StepperWorld:
     def distance(self, centre: Vec3) -> float:
         """Distance from ``centre`` to the mesh surface (for tests and diagnostics)."""
         p = np.asarray(centre, dtype=float)
+        self._fill(np.arange(len(self._pk)))
         q, _ = _closest_packed(self._pk, np.tile(p, (len(self._pk), 1)))
         return float(np.linalg.norm(q - p, axis=1).min())
 
@@ -512,6 +529,7 @@ class StepperWorld:
         pk, e0, edir, elen, verts = self._pk, self._e0, self._edir, self._elen, self._verts
         if self._near is not None:
             ti, ei, vi = self._near
+            self._fill(ti)
             pk, e0, edir, elen, verts = pk[ti], e0[ei], edir[ei], elen[ei], verts[vi]
         # vertices: |a - v + t u|^2 = r^2
         w = a - verts
