@@ -121,16 +121,23 @@ def _closest_packed(pk: FloatArray, points: FloatArray) -> tuple[FloatArray, NDA
     normals = pk[:, 9:12]
     proj = points - np.einsum("ij,ij->i", points - pk[:, 0:3], normals)[:, None] * normals
     corners = pk[:, 0:9].reshape(-1, 3, 3)
-    sides = pk[:, 21:30].reshape(-1, 3, 3)
-    inside = (
-        np.einsum("ikj,ikj->ik", pk[:, 12:21].reshape(-1, 3, 3), proj[:, None, :] - corners) >= 0.0
-    ).all(axis=1)
-    # the nearest point of each side (K, 3, 3), and the nearest side (the first of equals)
-    t = np.clip(np.einsum("ikj,ikj->ik", points[:, None, :] - corners, sides) / pk[:, 30:33], 0, 1)
-    q = corners + t[:, :, None] * sides
-    dq = points[:, None, :] - q
-    best = np.argmin(np.einsum("ikj,ikj->ik", dq, dq), axis=1)
-    edge_q = q[np.arange(len(q)), best]
+    sides = pk[:, 21:30].reshape(-1, 3)
+    # each (triangle, side) pair as a row (3K, 3)
+    g = np.einsum(
+        "ij,ij->i", pk[:, 12:21].reshape(-1, 3), (proj[:, None, :] - corners).reshape(-1, 3)
+    )
+    g3 = (g >= 0.0).reshape(-1, 3)
+    inside = g3[:, 0] & g3[:, 1] & g3[:, 2]
+    pa = (points[:, None, :] - corners).reshape(-1, 3)
+    t = np.clip(np.einsum("ij,ij->i", pa, sides) / pk[:, 30:33].reshape(-1), 0, 1)
+    q = (corners.reshape(-1, 3) + t[:, None] * sides).reshape(-1, 3, 3)
+    dq = (points[:, None, :] - q).reshape(-1, 3)
+    d = np.einsum("ij,ij->i", dq, dq).reshape(-1, 3)
+    # the nearest side, the first of equals
+    c1 = d[:, 1] < d[:, 0]
+    edge_q = np.where(c1[:, None], q[:, 1], q[:, 0])
+    c2 = d[:, 2] < np.where(c1, d[:, 1], d[:, 0])
+    edge_q = np.where(c2[:, None], q[:, 2], edge_q)
     out: FloatArray = np.where(inside[:, None], proj, edge_q)
     return out, inside
 
@@ -559,15 +566,18 @@ class StepperWorld:
         sd = n @ u
         movn = np.abs(sd) > 1e-14
         safe_sd = np.where(movn, sd, 1.0)
-        corners = pk[:, 0:9].reshape(-1, 3, 3)
-        side_n = pk[:, 12:21].reshape(-1, 3, 3)
-        g0 = np.einsum("ikj,ikj->ik", a - corners, side_n)  # (K, 3): g0 + t gd >= 0 inside
+        # the three sides of every triangle as rows (3K, 3): g0 + t gd >= 0 inside
+        side_n = pk[:, 12:21].reshape(-1, 3)
+        g0 = np.einsum("ij,ij->i", (a - pk[:, 0:9].reshape(-1, 3, 3)).reshape(-1, 3), side_n)
         gd = side_n @ u
         mv = np.abs(gd) > 1e-14
         root = -g0 / np.where(mv, gd, 1.0)
-        side_lo = np.where(mv & (gd > 0), root, -np.inf).max(axis=1)
-        side_hi = np.where(mv & (gd < 0), root, np.inf).min(axis=1)
-        bad = (~mv & (g0 < 0)).any(axis=1)
+        lo3 = np.where(mv & (gd > 0), root, -np.inf).reshape(-1, 3)
+        hi3 = np.where(mv & (gd < 0), root, np.inf).reshape(-1, 3)
+        bad3 = (~mv & (g0 < 0)).reshape(-1, 3)
+        side_lo = np.maximum(np.maximum(lo3[:, 0], lo3[:, 1]), lo3[:, 2])
+        side_hi = np.minimum(np.minimum(hi3[:, 0], hi3[:, 1]), hi3[:, 2])
+        bad = bad3[:, 0] | bad3[:, 1] | bad3[:, 2]
         keep = ~bad  # a line outside a side, parallel to it, never meets the triangle
         prims = _Prims(
             vb=vb,
