@@ -239,7 +239,7 @@ class StepperWorld:
         self._tc = (tri[:, 0] + tri[:, 1] + tri[:, 2]) / 3.0
         rel = tri - self._tc[:, None, :]
         self._tr = np.sqrt(
-            np.maximum.reduce([_sq(rel[:, 0]), _sq(rel[:, 1]), _sq(rel[:, 2])])
+            np.maximum(np.maximum(_sq(rel[:, 0]), _sq(rel[:, 1])), _sq(rel[:, 2]))
         )  # the furthest corner
         self._tr_max = float(self._tr.max()) if len(self._tr) else 0.0
         self._tree = cKDTree(self._tc)
