@@ -2,8 +2,9 @@
 
 Run: ``.venv/bin/python benchmarks/bench_dense.py`` (prints a table; never fails on time).
 Each exploration runs in a fresh process (the stepper, 33-sensor finger, seed 0) that reports
-its own wall time and peak resident memory (``resource.getrusage``), so one run's memory does
-not hide another's. Goal (issue 10): the 200k mesh in at most 10× the time of the 1k mesh of
+its own wall time, CPU time (``time.process_time``: steadier than the wall time on a shared
+machine) and peak resident memory (``resource.getrusage``), so one run's memory does not hide
+another's. Goal (issue 10): the 200k mesh in at most 10× the time of the 1k mesh of
 the same shape, and under 1 GB.
 
 * ``box``: a 8 × 6 × 5 cm box, its triangles split 4 ways 3 times (768) or 7 times (196 608);
@@ -54,13 +55,14 @@ def run_one(shape: str, level: int, jitter: float) -> dict[str, float]:
     from tactile_kb.touch.stepper import StepperExplorer
 
     mesh = build(shape, level, jitter)
-    t0 = time.perf_counter()
+    t0, c0 = time.perf_counter(), time.process_time()
     rec = StepperExplorer(completer=model_completer()).explore(mesh, seed=0)
-    seconds = time.perf_counter() - t0
+    seconds, cpu = time.perf_counter() - t0, time.process_time() - c0
     peak_kib = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss  # KiB on Linux
     return {
         "triangles": len(mesh.faces),
         "seconds": seconds,
+        "cpu": cpu,
         "peak_mb": peak_kib / 1024.0,
         "touches": rec.touches,
         "closed": rec.ending == "closed",
@@ -77,11 +79,14 @@ def main() -> int:
             text=True,
         ).stdout
         rows.append((label, json.loads(out.splitlines()[-1])))
-    print(f"{'object':22} {'triangles':>9} {'seconds':>8} {'peak MB':>8} {'touches':>7}  closed")
+    print(
+        f"{'object':22} {'triangles':>9} {'seconds':>8} {'CPU s':>7} {'peak MB':>8} {'touches':>7}"
+        "  closed"
+    )
     for label, r in rows:
         print(
-            f"{label:22} {r['triangles']:9d} {r['seconds']:8.2f} {r['peak_mb']:8.0f} "
-            f"{r['touches']:7d}  {'yes' if r['closed'] else 'no'}"
+            f"{label:22} {r['triangles']:9d} {r['seconds']:8.2f} {r['cpu']:7.2f} "
+            f"{r['peak_mb']:8.0f} {r['touches']:7d}  {'yes' if r['closed'] else 'no'}"
         )
     print()
     for k in range(0, len(rows), 2):
@@ -89,7 +94,8 @@ def main() -> int:
         ratio = big["seconds"] / small["seconds"]
         print(
             f"{label}: {big['triangles']} vs {small['triangles']} triangles: "
-            f"{ratio:.1f}x the time (goal ≤ 10x), peak {big['peak_mb']:.0f} MB (goal < 1024 MB)"
+            f"{ratio:.1f}x the time (goal ≤ 10x; CPU {big['cpu'] / small['cpu']:.1f}x), "
+            f"peak {big['peak_mb']:.0f} MB (goal < 1024 MB)"
         )
     return 0
 

@@ -41,6 +41,7 @@ import copy
 import itertools
 import math
 from collections.abc import Iterator, Sequence
+from dataclasses import dataclass
 
 import numpy as np
 import trimesh
@@ -72,6 +73,7 @@ _NUDGE = 1e-8  # how far past a change the motion stops, so the new state holds 
 _EPS_T = 1e-12
 _BATCH = 48  # sensor states evaluated together along a motion
 _DENSE_STRIDE = 8  # on a dense mesh, sensor states are first sampled every 8th gap
+_CONTACT_CACHE = 64  # single-point contact sets kept (see StepperWorld._contacts)
 
 DENSE_FACES = 4000
 """Meshes with more triangles than this are searched through k-d trees: a motion meets only the
@@ -81,6 +83,23 @@ few-thousand-triangle one does, instead of 50 times more)."""
 SAME_CONTACT_DEG = DEFAULTS.world.same_contact_deg
 """Degrees: a contact on a triangle's side this close in direction to a contact inside a face
 is the same contact (see :meth:`StepperWorld._touching`)."""
+
+
+def _pack(tri: FloatArray, normals: FloatArray, sides: FloatArray | None = None) -> FloatArray:
+    """(K, 33) rows of what :func:`_closest_packed` reads about the triangles ``tri`` (K, 3, 3)
+    with unit ``normals`` (K, 3): the corners v0, v1, v2, the normal, the inward side normals
+    ``n × (v[k+1] − v[k])`` (``sides`` (K, 3, 3) when given), the sides ``v[k+1] − v[k]``
+    and their squared lengths."""
+    pk = np.empty((len(tri), 33))
+    pk[:, 0:9] = tri.reshape(-1, 9)
+    pk[:, 9:12] = normals
+    for k in range(3):
+        j = (k + 1) % 3
+        side = np.subtract(pk[:, 3 * j : 3 * j + 3], pk[:, 3 * k : 3 * k + 3])
+        pk[:, 21 + 3 * k : 24 + 3 * k] = side
+        pk[:, 12 + 3 * k : 15 + 3 * k] = np.cross(normals, side) if sides is None else sides[:, k]
+        pk[:, 30 + k] = np.einsum("ij,ij->i", side, side)
+    return pk
 
 
 def _closest(
@@ -94,23 +113,78 @@ def _closest(
     plane when it falls inside the triangle, else the nearest point of its three sides (the
     same points as ``trimesh.triangles.closest_point``, which does not say which case it was).
     """
-    v0 = tri[:, 0]
-    proj = points - np.einsum("ij,ij->i", points - v0, normals)[:, None] * normals
-    inside = np.ones(len(points), dtype=bool)
-    best = np.full(len(points), np.inf)
-    edge_q = np.zeros_like(points)
-    for k in range(3):
-        a = tri[:, k]
-        ab = tri[:, (k + 1) % 3] - a
-        inside &= np.einsum("ij,ij->i", sides[:, k], proj - a) >= 0.0
-        t = np.clip(np.einsum("ij,ij->i", points - a, ab) / np.einsum("ij,ij->i", ab, ab), 0, 1)
-        q = a + t[:, None] * ab
-        d = np.einsum("ij,ij->i", points - q, points - q)
-        closer = d < best
-        best = np.where(closer, d, best)
-        edge_q = np.where(closer[:, None], q, edge_q)
+    return _closest_packed(_pack(tri, normals, sides), points)
+
+
+def _closest_packed(pk: FloatArray, points: FloatArray) -> tuple[FloatArray, NDArray[np.bool_]]:
+    """:func:`_closest` of the triangles packed by :func:`_pack` (one gather per query)."""
+    normals = pk[:, 9:12]
+    proj = points - np.einsum("ij,ij->i", points - pk[:, 0:3], normals)[:, None] * normals
+    corners = pk[:, 0:9].reshape(-1, 3, 3)
+    sides = pk[:, 21:30].reshape(-1, 3)
+    # each (triangle, side) pair as a row (3K, 3)
+    g = np.einsum(
+        "ij,ij->i", pk[:, 12:21].reshape(-1, 3), (proj[:, None, :] - corners).reshape(-1, 3)
+    )
+    g3 = (g >= 0.0).reshape(-1, 3)
+    inside = g3[:, 0] & g3[:, 1] & g3[:, 2]
+    pa = (points[:, None, :] - corners).reshape(-1, 3)
+    t = np.clip(np.einsum("ij,ij->i", pa, sides) / pk[:, 30:33].reshape(-1), 0, 1)
+    q = (corners.reshape(-1, 3) + t[:, None] * sides).reshape(-1, 3, 3)
+    dq = (points[:, None, :] - q).reshape(-1, 3)
+    d = np.einsum("ij,ij->i", dq, dq).reshape(-1, 3)
+    # the nearest side, the first of equals
+    c1 = d[:, 1] < d[:, 0]
+    edge_q = np.where(c1[:, None], q[:, 1], q[:, 0])
+    c2 = d[:, 2] < np.where(c1, d[:, 1], d[:, 0])
+    edge_q = np.where(c2[:, None], q[:, 2], edge_q)
     out: FloatArray = np.where(inside[:, None], proj, edge_q)
     return out, inside
+
+
+def _sq(x: FloatArray) -> FloatArray:
+    """Squared lengths of the rows of ``x`` (K, 3), summed in the order ``np.linalg.norm`` sums."""
+    out: FloatArray = x[:, 0] * x[:, 0] + x[:, 1] * x[:, 1] + x[:, 2] * x[:, 2]
+    return out
+
+
+def _norms(x: FloatArray) -> FloatArray:
+    """Lengths of the rows of ``x`` (K, 3), as ``np.linalg.norm(x, axis=1)``."""
+    out: FloatArray = np.sqrt(_sq(x))
+    return out
+
+
+def _unique_edges(faces: NDArray[np.int64], nv: int) -> NDArray[np.int64]:
+    """The undirected edges of ``faces`` (F, 3), once each, as (E, 2) sorted vertex pairs."""
+    ends = faces[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2)
+    keys = np.minimum(ends[:, 0], ends[:, 1]) * nv + np.maximum(ends[:, 0], ends[:, 1])
+    keys.sort()
+    keys = keys[np.concatenate(([True], keys[1:] != keys[:-1]))]
+    out: NDArray[np.int64] = np.column_stack([keys // nv, keys % nv])
+    return out
+
+
+@dataclass(frozen=True)
+class _Prims:
+    """The radius-independent terms of :meth:`StepperWorld._intervals` for one line: vertices
+    (``vb`` = w·u, ``vww`` = |w|²), edges (the cylinder's quadratic without its radius, the
+    slab of the edge's length) and triangles (the plane's offset and rate, and the interval
+    inside the three sides)."""
+
+    vb: FloatArray
+    vww: FloatArray
+    aa: FloatArray
+    bb: FloatArray
+    wpwp: FloatArray
+    par: NDArray[np.bool_]
+    safe_a: FloatArray
+    slo: FloatArray
+    shi: FloatArray
+    s0: FloatArray
+    movn: NDArray[np.bool_]
+    safe_sd: FloatArray
+    side_lo: FloatArray
+    side_hi: FloatArray
 
 
 def _v3(a: Sequence[float] | FloatArray) -> Vec3:
@@ -155,40 +229,71 @@ class StepperWorld:
         self._cos = finger.cos_cone
         v = np.array(mesh.vertices, dtype=float)
         f = np.array(mesh.faces, dtype=np.int64)
-        self._tri = v[f]  # (F, 3, 3)
-        normals = np.cross(self._tri[:, 1] - self._tri[:, 0], self._tri[:, 2] - self._tri[:, 0])
-        lengths = np.linalg.norm(normals, axis=1)
+        tri = v[f]  # (F, 3, 3)
+        normals = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
+        lengths = _norms(normals)
         keep = lengths > 1e-18
-        self._tri, normals, lengths = self._tri[keep], normals[keep], lengths[keep]
+        tri, normals, lengths = tri[keep], normals[keep], lengths[keep]
         self._n = normals / lengths[:, None]
         # bounding spheres of the triangles: a conservative pre-filter for closest points
-        self._tc = self._tri.mean(axis=1)
-        self._tr = np.linalg.norm(self._tri - self._tc[:, None, :], axis=2).max(axis=1)
+        self._tc = (tri[:, 0] + tri[:, 1] + tri[:, 2]) / 3.0
+        rel = tri - self._tc[:, None, :]
+        self._tr = np.sqrt(
+            np.maximum(np.maximum(_sq(rel[:, 0]), _sq(rel[:, 1])), _sq(rel[:, 2]))
+        )  # the furthest corner
         self._tr_max = float(self._tr.max()) if len(self._tr) else 0.0
         self._tree = cKDTree(self._tc)
-        # inward side normals of each triangle: n × (vj − vi)
-        self._side_m = np.stack(
-            [np.cross(self._n, self._tri[:, (k + 1) % 3] - self._tri[:, k]) for k in range(3)],
-            axis=1,
-        )  # (F, 3, 3)
-        edges = np.asarray(mesh.edges_unique, dtype=np.int64)
+        # rows read in one gather, filled when a triangle is first met (a dense mesh's
+        # exploration meets a fraction of them): (F, 8) for _may_touch, (F, 33) for the rest
+        self._tri = tri
+        self._pre = np.empty((len(tri), 8))
+        self._pk = np.empty((len(tri), 33))
+        self._filled = np.zeros(len(tri), dtype=bool)
+        edges = _unique_edges(f, len(v))
         self._e0 = v[edges[:, 0]]
         evec = v[edges[:, 1]] - self._e0
-        self._elen = np.linalg.norm(evec, axis=1)
+        self._elen = _norms(evec)
         ok = self._elen > 1e-15
         self._e0, evec, self._elen = self._e0[ok], evec[ok], self._elen[ok]
         self._edir = evec / self._elen[:, None]
-        self._verts = v[np.unique(f)]
-        self._dense = len(self._tri) > DENSE_FACES
-        if self._dense:  # primitives near a segment, found through their centres
-            self._etree = cKDTree(self._e0 + 0.5 * self._elen[:, None] * self._edir)
+        self._verts = v[np.flatnonzero(np.bincount(f.ravel(), minlength=len(v)))]
+        self._dense = len(self._n) > DENSE_FACES
+        if self._dense:  # primitives near a segment, found through their centres (the union
+            # of balls does not depend on how a tree is built, so these are built fast)
+            self._etree = cKDTree(
+                self._e0 + 0.5 * self._elen[:, None] * self._edir,
+                balanced_tree=False,
+                compact_nodes=False,
+            )
             self._er_max = float(0.5 * self._elen.max()) if len(self._elen) else 0.0
-            self._vtree = cKDTree(self._verts)
+            self._vtree = cKDTree(self._verts, balanced_tree=False, compact_nodes=False)
+        else:
+            self._fill(np.arange(len(tri)))
         self._near: tuple[NDArray[np.intp], NDArray[np.intp], NDArray[np.intp]] | None = None
+        self._ccache: dict[tuple[bytes, float, float], FloatArray] = {}
+        self._pcache: list[
+            tuple[
+                tuple[bytes, bytes],
+                tuple[NDArray[np.intp], NDArray[np.intp], NDArray[np.intp]] | None,
+                _Prims,
+            ]
+        ] = []
         bounds = np.array(mesh.bounds, dtype=float)
         self._bounds = bounds
         self._workspace = workspace or default_workspace(bounds, self._rho)
         self._hint = Box(lo=_v3(bounds[0] - hint_margin), hi=_v3(bounds[1] + hint_margin))
+
+    def _fill(self, ti: NDArray[np.intp]) -> None:
+        """Fill the packed rows of the triangles ``ti`` that are not filled yet."""
+        todo = ti[~self._filled[ti]]
+        if len(todo) == 0:
+            return
+        todo = np.unique(todo)
+        tri, n, tc = self._tri[todo], self._n[todo], self._tc[todo]
+        flat = np.abs(np.einsum("ijk,ik->ij", tri - tc[:, None, :], n)).max(axis=1) + 1e-12
+        self._pre[todo] = np.column_stack([tc, n, self._tr[todo], flat])
+        self._pk[todo] = _pack(tri, n)
+        self._filled[todo] = True
 
     # protocol attributes ------------------------------------------------------------------------
     @property
@@ -218,6 +323,7 @@ class StepperWorld:
         the object or the table there raises :class:`~tactile_kb.errors.ExplorationError`.
         """
         out = copy.copy(self)
+        out._pcache = []
         out._orientation = orientation
         out._dirs = self._finger.directions_at(orientation)
         out._axis = np.asarray(orientation.axis, dtype=float)
@@ -307,12 +413,11 @@ class StepperWorld:
         found = self._tree.query_ball_point(pts, r + self._tr_max + 1e-9, return_sorted=False)
         pi = np.repeat(np.arange(len(pts)), [len(f) for f in found])
         ti = np.fromiter(itertools.chain.from_iterable(found), dtype=np.intp, count=len(pi))
-        if len(pi):  # bounding spheres: a triangle further than its radius + r cannot touch
-            near = np.linalg.norm(pts[pi] - self._tc[ti], axis=1) - self._tr[ti] <= r + 1e-9
-            pi, ti = pi[near], ti[near]
+        if len(pi):  # a lower bound of the distance: only triangles that can touch go on
+            pi, ti = self._may_touch(pts, pi, ti, r + 1e-9)
         if len(pi) == 0:
             return pi, np.zeros((0, 3))
-        q, inside = _closest(self._tri[ti], self._n[ti], self._side_m[ti], pts[pi])
+        q, inside = _closest_packed(self._pk[ti], pts[pi])
         d = q - pts[pi]
         dist = np.linalg.norm(d, axis=1)
         ok = (dist <= r) & (dist > 1e-12)
@@ -328,9 +433,47 @@ class StepperWorld:
             pi, u = pi[keep], u[keep]
         return pi, u
 
+    def _may_touch(
+        self, pts: FloatArray, pi: NDArray[np.intp], ti: NDArray[np.intp], r: float
+    ) -> tuple[NDArray[np.intp], NDArray[np.intp]]:
+        """The pairs (point ``pi``, triangle ``ti``) whose distance can be ≤ ``r``, in order.
+
+        Triangle ``t`` lies in the disc of radius ``tr`` about its centroid ``tc`` in the
+        plane of normal ``n``, thickened by ``flat`` (how far its corners are from that plane
+        in floating point). With ``s`` the point's height over that plane and ``l`` its
+        distance from ``tc`` along it, the distance is at least
+        ``hypot(max(|s| − flat, 0), max(l − tr, 0))``: a pair further than ``r`` by that
+        bound cannot touch, whatever the exact closest point (a conservative test that keeps
+        the order of the pairs).
+        """
+        self._fill(ti)
+        pre = self._pre[ti]  # (k, 8): tc, n, tr, flat
+        dv = pts[pi] - pre[:, 0:3]
+        s = np.abs(np.einsum("ij,ij->i", dv, pre[:, 3:6]))
+        d2 = np.einsum("ij,ij->i", dv, dv)
+        h = np.maximum(s - pre[:, 7], 0.0)
+        lat = np.maximum(np.sqrt(np.maximum(d2 - s * s, 0.0)) - pre[:, 6], 0.0)
+        near = h * h + lat * lat <= r * r
+        return pi[near], ti[near]
+
     def _contacts(self, p: FloatArray) -> FloatArray:
-        """Unit directions from ``p`` to the surface within ρ + CONTACT_TOL, (k, 3)."""
-        return self._touching(np.asarray(p, dtype=float).reshape(1, 3))[1]
+        """Unit directions from ``p`` to the surface within ρ + CONTACT_TOL, (k, 3).
+
+        A motion starts where the last one ended and asks there again: the last few answers
+        are kept (read-only), by the exact coordinates and the tolerances that decide them.
+        """
+        pt = np.asarray(p, dtype=float).reshape(1, 3)
+        world = current().world
+        key = (pt.tobytes(), world.contact_tol, world.same_contact_deg)
+        hit = self._ccache.get(key)
+        if hit is not None:
+            return hit
+        out = self._touching(pt)[1]
+        out.flags.writeable = False
+        if len(self._ccache) >= _CONTACT_CACHE:
+            del self._ccache[next(iter(self._ccache))]
+        self._ccache[key] = out
+        return out
 
     def _fired(self, p: FloatArray) -> tuple[int, ...]:
         d = self._contacts(p)
@@ -354,7 +497,8 @@ class StepperWorld:
     def distance(self, centre: Vec3) -> float:
         """Distance from ``centre`` to the mesh surface (for tests and diagnostics)."""
         p = np.asarray(centre, dtype=float)
-        q, _ = _closest(self._tri, self._n, self._side_m, np.tile(p, (len(self._tri), 1)))
+        self._fill(np.arange(len(self._pk)))
+        q, _ = _closest_packed(self._pk, np.tile(p, (len(self._pk), 1)))
         return float(np.linalg.norm(q - p, axis=1).min())
 
     # interval algebra ---------------------------------------------------------------------------
@@ -369,10 +513,12 @@ class StepperWorld:
         pad = r + 0.5 * step + 1e-9
 
         def near(tree: cKDTree, radius: float) -> NDArray[np.intp]:
-            found = tree.query_ball_point(pts, radius)
-            if len(found) == 0:
-                return np.zeros(0, dtype=np.intp)
-            return np.unique(np.fromiter(itertools.chain.from_iterable(found), dtype=np.intp))
+            # the union of the balls' indices, in increasing order (a mask, not a sort)
+            found = tree.query_ball_point(pts, radius, return_sorted=False)
+            mask = np.zeros(tree.n, dtype=bool)
+            mask[np.fromiter(itertools.chain.from_iterable(found), dtype=np.intp)] = True
+            out: NDArray[np.intp] = np.flatnonzero(mask)
+            return out
 
         return (
             near(self._tree, pad + self._tr_max),
@@ -380,26 +526,22 @@ class StepperWorld:
             near(self._vtree, pad),
         )
 
-    def _intervals(self, a: FloatArray, u: FloatArray, r: float) -> tuple[FloatArray, FloatArray]:
-        """Entry and exit parameters of the line a + t·u in every primitive of radius r (only
-        the primitives near the current motion's segment on a dense mesh)."""
-        tri, n, side_m = self._tri, self._n, self._side_m
-        e0, edir, elen, verts = self._e0, self._edir, self._elen, self._verts
+    def _primitives(self, a: FloatArray, u: FloatArray) -> _Prims:
+        """The parts of :meth:`_intervals` that do not depend on the radius, for the line
+        a + t·u and the current candidates (kept for the few radii one motion asks about)."""
+        key = (a.tobytes(), u.tobytes())
+        for k, near, prims in self._pcache:
+            if k == key and near is self._near:
+                return prims
+        pk, e0, edir, elen, verts = self._pk, self._e0, self._edir, self._elen, self._verts
         if self._near is not None:
             ti, ei, vi = self._near
-            tri, n, side_m = tri[ti], n[ti], side_m[ti]
-            e0, edir, elen, verts = e0[ei], edir[ei], elen[ei], verts[vi]
-        los: list[FloatArray] = []
-        his: list[FloatArray] = []
+            self._fill(ti)
+            pk, e0, edir, elen, verts = pk[ti], e0[ei], edir[ei], elen[ei], verts[vi]
         # vertices: |a - v + t u|^2 = r^2
         w = a - verts
-        b = w @ u
-        c = np.einsum("ij,ij->i", w, w) - r * r
-        disc = b * b - c
-        ok = disc > 0
-        sq = np.sqrt(np.where(ok, disc, 0.0))
-        los.append(np.where(ok, -b - sq, np.inf))
-        his.append(np.where(ok, -b + sq, -np.inf))
+        vb = w @ u
+        vww = np.einsum("ij,ij->i", w, w)
         # edges: infinite cylinder clipped by the slab 0 <= s <= len
         w = a - e0
         we = np.einsum("ij,ij->i", w, edir)
@@ -408,56 +550,87 @@ class StepperWorld:
         up = u - ue[:, None] * edir
         aa = np.einsum("ij,ij->i", up, up)
         bb = np.einsum("ij,ij->i", wp, up)
-        cc = np.einsum("ij,ij->i", wp, wp) - r * r
+        wpwp = np.einsum("ij,ij->i", wp, wp)
         par = aa < 1e-14
-        disc = bb * bb - aa * cc
-        okc = (disc > 0) & ~par
-        sq = np.sqrt(np.where(okc, disc, 0.0))
         safe_a = np.where(par, 1.0, aa)
-        lo = np.where(okc, (-bb - sq) / safe_a, np.inf)
-        hi = np.where(okc, (-bb + sq) / safe_a, -np.inf)
-        inside_par = par & (cc < 0)
-        lo = np.where(inside_par, -np.inf, lo)
-        hi = np.where(inside_par, np.inf, hi)
         moving = np.abs(ue) > 1e-14
         safe_ue = np.where(moving, ue, 1.0)
         s1 = -we / safe_ue
         s2 = (elen - we) / safe_ue
-        slo = np.where(
-            moving, np.minimum(s1, s2), np.where((we >= 0) & (we <= elen), -np.inf, np.inf)
-        )
-        shi = np.where(
-            moving, np.maximum(s1, s2), np.where((we >= 0) & (we <= elen), np.inf, -np.inf)
-        )
-        los.append(np.maximum(lo, slo))
-        his.append(np.minimum(hi, shi))
-        # triangles: |s(t)| <= r and the projection inside the triangle
-        w = a - tri[:, 0]
-        s0 = np.einsum("ij,ij->i", w, n)
+        within = (we >= 0) & (we <= elen)
+        slo = np.where(moving, np.minimum(s1, s2), np.where(within, -np.inf, np.inf))
+        shi = np.where(moving, np.maximum(s1, s2), np.where(within, np.inf, -np.inf))
+        # triangles: the plane's slab, and the projection inside the three sides
+        n = pk[:, 9:12]
+        s0 = np.einsum("ij,ij->i", a - pk[:, 0:3], n)
         sd = n @ u
         movn = np.abs(sd) > 1e-14
         safe_sd = np.where(movn, sd, 1.0)
-        t1 = (-r - s0) / safe_sd
-        t2 = (r - s0) / safe_sd
-        inside = np.abs(s0) < r
-        lo = np.where(movn, np.minimum(t1, t2), np.where(inside, -np.inf, np.inf))
-        hi = np.where(movn, np.maximum(t1, t2), np.where(inside, np.inf, -np.inf))
-        for k in range(3):
-            m = side_m[:, k]
-            g0 = np.einsum("ij,ij->i", a - tri[:, k], m)
-            gd = m @ u
-            mv = np.abs(gd) > 1e-14
-            safe_gd = np.where(mv, gd, 1.0)
-            root = -g0 / safe_gd
-            # g0 + t gd >= 0
-            lo = np.where(mv & (gd > 0), np.maximum(lo, root), lo)
-            hi = np.where(mv & (gd < 0), np.minimum(hi, root), hi)
-            bad = ~mv & (g0 < 0)
-            lo = np.where(bad, np.inf, lo)
-            hi = np.where(bad, -np.inf, hi)
-        los.append(lo)
-        his.append(hi)
-        return np.concatenate(los), np.concatenate(his)
+        # the three sides of every triangle as rows (3K, 3): g0 + t gd >= 0 inside
+        side_n = pk[:, 12:21].reshape(-1, 3)
+        g0 = np.einsum("ij,ij->i", (a - pk[:, 0:9].reshape(-1, 3, 3)).reshape(-1, 3), side_n)
+        gd = side_n @ u
+        mv = np.abs(gd) > 1e-14
+        root = -g0 / np.where(mv, gd, 1.0)
+        lo3 = np.where(mv & (gd > 0), root, -np.inf).reshape(-1, 3)
+        hi3 = np.where(mv & (gd < 0), root, np.inf).reshape(-1, 3)
+        bad3 = (~mv & (g0 < 0)).reshape(-1, 3)
+        side_lo = np.maximum(np.maximum(lo3[:, 0], lo3[:, 1]), lo3[:, 2])
+        side_hi = np.minimum(np.minimum(hi3[:, 0], hi3[:, 1]), hi3[:, 2])
+        bad = bad3[:, 0] | bad3[:, 1] | bad3[:, 2]
+        keep = ~bad  # a line outside a side, parallel to it, never meets the triangle
+        prims = _Prims(
+            vb=vb,
+            vww=vww,
+            aa=aa,
+            bb=bb,
+            wpwp=wpwp,
+            par=par,
+            safe_a=safe_a,
+            slo=slo,
+            shi=shi,
+            s0=s0[keep],
+            movn=movn[keep],
+            safe_sd=safe_sd[keep],
+            side_lo=side_lo[keep],
+            side_hi=side_hi[keep],
+        )
+        if len(self._pcache) >= 4:
+            del self._pcache[0]
+        self._pcache.append((key, self._near, prims))
+        return prims
+
+    def _intervals(self, a: FloatArray, u: FloatArray, r: float) -> tuple[FloatArray, FloatArray]:
+        """Entry and exit parameters of the line a + t·u in the primitives of radius r (only
+        the primitives near the current motion's segment on a dense mesh; triangles the line
+        cannot meet at any radius are left out)."""
+        p = self._primitives(a, u)
+        rr = r * r
+        # vertices
+        disc = p.vb * p.vb - (p.vww - rr)
+        ok = disc > 0
+        sq = np.sqrt(np.where(ok, disc, 0.0))
+        vlo = np.where(ok, -p.vb - sq, np.inf)
+        vhi = np.where(ok, -p.vb + sq, -np.inf)
+        # edges
+        cc = p.wpwp - rr
+        disc = p.bb * p.bb - p.aa * cc
+        okc = (disc > 0) & ~p.par
+        sq = np.sqrt(np.where(okc, disc, 0.0))
+        lo = np.where(okc, (-p.bb - sq) / p.safe_a, np.inf)
+        hi = np.where(okc, (-p.bb + sq) / p.safe_a, -np.inf)
+        inside_par = p.par & (cc < 0)
+        elo = np.maximum(np.where(inside_par, -np.inf, lo), p.slo)
+        ehi = np.minimum(np.where(inside_par, np.inf, hi), p.shi)
+        # triangles: |s(t)| <= r and the projection inside the triangle
+        t1 = (-r - p.s0) / p.safe_sd
+        t2 = (r - p.s0) / p.safe_sd
+        inside = np.abs(p.s0) < r
+        lo = np.where(p.movn, np.minimum(t1, t2), np.where(inside, -np.inf, np.inf))
+        hi = np.where(p.movn, np.maximum(t1, t2), np.where(inside, np.inf, -np.inf))
+        tlo = np.maximum(lo, p.side_lo)
+        thi = np.minimum(hi, p.side_hi)
+        return np.concatenate([vlo, elo, tlo]), np.concatenate([vhi, ehi, thi])
 
     def _block_at(self, a: FloatArray, u: FloatArray, limit: float) -> float:
         """Where along the segment the tip would start to penetrate (``inf`` if nowhere)."""
@@ -559,12 +732,14 @@ class StepperWorld:
         fired0 = self._fired(a)
         room = self._workspace.room(_v3(a), _v3(u))
         reach = min(float(length), room)
+        self._pcache.clear()
         if self._dense:
             self._near = self._near_segment(a, u, reach, self._rho + current().world.contact_tol)
         try:
             return self._run_near(kind, a, u, length, fired0, room, reach)
         finally:
             self._near = None
+            self._pcache.clear()
 
     def _run_near(
         self,
