@@ -217,8 +217,9 @@ def load_object(obj: ObjectLike, *, name: str | None = None) -> trimesh.Trimesh:
     if not mesh.is_watertight:
         mesh = _close(mesh, notes)
     solid = mesh if mesh.is_watertight else mesh.convex_hull
-    with np.errstate(all="ignore"):
-        volume = abs(float(solid.volume))
+    with np.errstate(all="ignore"):  # the signed volume alone (trimesh's mass properties cost
+        tri = np.asarray(solid.triangles, dtype=float)  # 0.1 s on 200k triangles)
+        volume = abs(float(np.einsum("ij,ij->", tri[:, 0], np.cross(tri[:, 1], tri[:, 2])))) / 6
     if not volume >= current().objects.min_size ** 3:  # NaN too
         raise ObjectError(f"{label}: not a solid: degenerate mesh with no volume")
     if float(extent.max()) > current().objects.max_size:
