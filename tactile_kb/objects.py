@@ -217,9 +217,8 @@ def load_object(obj: ObjectLike, *, name: str | None = None) -> trimesh.Trimesh:
     if not mesh.is_watertight:
         mesh = _close(mesh, notes)
     solid = mesh if mesh.is_watertight else mesh.convex_hull
-    with np.errstate(all="ignore"):  # the signed volume alone (trimesh's mass properties cost
-        tri = np.asarray(solid.triangles, dtype=float)  # 0.1 s on 200k triangles)
-        volume = abs(float(np.einsum("ij,ij->", tri[:, 0], np.cross(tri[:, 1], tri[:, 2])))) / 6
+    signed = _signed_volume(solid)
+    volume = abs(signed)
     if not volume >= current().objects.min_size ** 3:  # NaN too
         raise ObjectError(f"{label}: not a solid: degenerate mesh with no volume")
     if float(extent.max()) > current().objects.max_size:
@@ -236,7 +235,7 @@ def load_object(obj: ObjectLike, *, name: str | None = None) -> trimesh.Trimesh:
             f"{label}: lies outside the workspace (|x|, |y| ≤ {current().objects.workspace_half_width:g} m); "
             "move it near the origin"
         )
-    if mesh.is_watertight and float(mesh.volume) < 0:
+    if mesh.is_watertight and signed < 0:  # (solid is mesh)
         mesh.invert()
     mesh.apply_translation((0.0, 0.0, -float(lo[2])))
     mesh.metadata["moved_z"] = -float(lo[2])  # reported in the exploration's notes
@@ -278,6 +277,14 @@ def _weld(mesh: trimesh.Trimesh, notes: list[str]) -> trimesh.Trimesh:
         return mesh
     notes.append(f"seams under {tol * 1e6:.2g} µm apart welded (the mesh was not closed)")
     return welded
+
+
+def _signed_volume(mesh: trimesh.Trimesh) -> float:
+    """The signed volume of a closed mesh, Σ v0·(v1 × v2) / 6: trimesh's ``volume`` computes
+    all the mass properties (0.2 s on 200k triangles) for it."""
+    tri = np.asarray(mesh.triangles, dtype=float)
+    with np.errstate(all="ignore"):
+        return float(np.einsum("ij,ij->", tri[:, 0], np.cross(tri[:, 1], tri[:, 2]))) / 6.0
 
 
 def _separate_touching(mesh: trimesh.Trimesh) -> trimesh.Trimesh:
