@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 
 import numpy as np
 import pytest
@@ -16,6 +17,7 @@ from tactile_kb.touch.finger import VERTICAL, Orientation, Wrist, builtin_finger
 from tactile_kb.touch.sensors import FaultySensors
 from tactile_kb.touch.stepper import StepperWorld
 from tactile_kb.touch.world import OrientableWorld
+from tactile_kb.types import FloatArray
 
 
 def _cube() -> trimesh.Trimesh:
@@ -225,3 +227,48 @@ def test_a_frustum_on_its_small_end_is_met_with_the_head_indexed() -> None:
     assert r.record.blind
     assert r.decision.label == "frustum"
     assert r.record.ending == "closed", r.record.unreachable
+
+
+def _slants(count: int, lo: float = 0.6, hi: float = 0.8) -> Callable[[FloatArray], bool]:
+    """A test of face normals: ``count`` of them have ``lo < |z| < hi``."""
+    return lambda n: int(((abs(n[:, 2]) > lo) & (abs(n[:, 2]) < hi)).sum()) == count
+
+
+def _posed(
+    m: trimesh.Trimesh, turn_deg: float, keep: Callable[[FloatArray], bool]
+) -> trimesh.Trimesh:
+    """``m`` in its most probable stable pose (trimesh's ``compute_stable_poses``) whose face
+    normals pass ``keep``, turned about z, centred on the table."""
+    transforms, probs = trimesh.poses.compute_stable_poses(m)
+    for k in np.argsort(-probs):
+        posed = m.copy()
+        posed.apply_transform(transforms[k])
+        if keep(np.unique(np.round(posed.face_normals, 6), axis=0)):
+            break
+    else:
+        raise AssertionError("no such stable pose")
+    posed.apply_translation(
+        (-posed.bounds.mean(axis=0)[0], -posed.bounds.mean(axis=0)[1], -posed.bounds[0][2])
+    )
+    return solids.rotate_about_z(posed, turn_deg)
+
+
+@pytest.mark.parametrize("turn", [0.0, 70.0])
+def test_a_lying_octagonal_prism_has_its_slanted_sides(turn: float) -> None:
+    # ground truth: on a side face, so four sides slant at 45° (two up, two overhanging), and
+    # the vertical finger's layers meet the upper ones at one height, near their lower edge:
+    # those touches are a face of their own, not the edge of a box
+    m = _posed(solids.prism(8, 0.0495, 0.0958), turn, _slants(4))
+    truth = np.unique(np.round(m.face_normals, 6), axis=0)
+    assert len(truth) == 10
+    slanted = [n for n in truth if 0.6 < abs(n[2]) < 0.8]
+    assert len(slanted) == 4
+    r = classify(m, rules="polyhedra")
+    assert r.decision.label == "prism"
+    poly = r.model.polyhedron
+    assert poly is not None
+    # every face the vertical finger can reach is in the model, within 3° (the two that
+    # overhang by 45° are met by no layer and leave no blind contact: not asked for here)
+    for n in truth:
+        if n[2] > -0.5:
+            assert float(np.max(poly.normals @ n)) >= math.cos(math.radians(3.0)), n
