@@ -504,6 +504,28 @@ def _over_the_rim(record: ExplorationRecord, probe: Probe) -> Probe:
     return Probe(_v(point), probe.normal, probe.reach, probe.reason, middle=False)
 
 
+def _nearer_the_touches(record: ExplorationRecord, probe: Probe) -> Probe:
+    """``probe`` (approached sideways) again, aimed halfway to the nearest tip centre that
+    touched a surface facing about the same way (within 45°).
+
+    A probe placed from the model at a face's other height, or near the table, found nothing:
+    the model's face there extends beyond the object (its normal is the sensor's, quantised,
+    or a face the model lacks cuts it off). The same probe again would find nothing again;
+    halfway to where that face was touched it lies on the object if the face reaches there.
+    """
+    n = np.asarray(probe.normal, dtype=float)
+    centres = np.asarray([c.centre for c in record.contacts], dtype=float).reshape(-1, 3)
+    normals = -np.asarray([c.direction for c in record.contacts], dtype=float).reshape(-1, 3)
+    near = normals @ n >= math.cos(math.radians(45.0))
+    if not near.any():
+        return probe
+    target = np.asarray(probe.target, dtype=float)
+    pool = centres[near]
+    nearest = pool[int(np.argmin(np.linalg.norm(pool - target, axis=1)))]
+    moved = 0.5 * (target + nearest)
+    return Probe(_v(moved), probe.normal, probe.reach, probe.reason, facing=probe.facing)
+
+
 def _v(a: FloatArray) -> tuple[float, float, float]:
     return (float(a[0]), float(a[1]), float(a[2]))
 
@@ -578,6 +600,13 @@ class ModelCompleter:
         probe = todo[0]
         if probe.reason == "open towards +z" and self._tried[probe.reason]:
             probe = _over_the_rim(record, probe)
+        elif (
+            self._tried[probe.reason]
+            and last is not None
+            and not last[1]
+            and abs(probe.normal[2]) < 0.9
+        ):
+            probe = _nearer_the_touches(record, probe)
         self._tried[probe.reason] += 1
         return probe
 

@@ -272,3 +272,31 @@ def test_a_lying_octagonal_prism_has_its_slanted_sides(turn: float) -> None:
     for n in truth:
         if n[2] > -0.5:
             assert float(np.max(poly.normals @ n)) >= math.cos(math.radians(3.0)), n
+
+
+def _stable(m: trimesh.Trimesh, k: int, turn_deg: float) -> trimesh.Trimesh:
+    """``m`` in its ``k``-th stable pose of probability ≥ 2 % (trimesh's order), turned about
+    z, centred on the table."""
+    transforms, probs = trimesh.poses.compute_stable_poses(m)
+    posed = m.copy()
+    posed.apply_transform([t for t, p in zip(transforms, probs, strict=True) if p >= 0.02][k])
+    posed.apply_translation(
+        (-posed.bounds.mean(axis=0)[0], -posed.bounds.mean(axis=0)[1], -posed.bounds[0][2])
+    )
+    return solids.rotate_about_z(posed, turn_deg)
+
+
+@pytest.mark.parametrize(("pose", "turn"), [(2, 66.0), (3, 347.0)])
+def test_a_pyramid_on_a_lateral_face_is_probed_again_nearer_its_touches(
+    pose: int, turn: float
+) -> None:
+    # ground truth: a pentagonal pyramid on a lateral face (its base stands tilted, one
+    # lateral face overhangs); the probes the model places at a face's other height miss the
+    # object while its normals are quantised, and are sent again nearer where it was touched
+    m = _stable(solids.rotate_about_z(solids.pyramid(5, 0.0518, 0.0547), 290.9), pose, turn)
+    truth = np.unique(np.round(m.face_normals, 6), axis=0)
+    assert len(truth) == 6
+    assert (truth[:, 2] < -0.99).sum() == 1  # on a face
+    assert (np.abs(truth[:, 2]) < 0.99).sum() == 5  # the base is not on the table
+    r = classify(m, rules="polyhedra")
+    assert r.decision.label == "pyramid"
