@@ -173,6 +173,8 @@ def completion_probes(model: ObjectModel, *, height_gap: float | None = None) ->
             continue  # tops and the table: not probed at another height
         zs = centres[list(face.contacts), 2] if face.contacts else np.zeros(0)
         if len(zs) and float(zs.max() - zs.min()) >= gap:
+            if not face.refined:
+                probes += _off_line_probes(face, n, poly.vertices[list(verts)], centres, rho)
             continue
         ring = poly.vertices[list(verts)]
         z0, z1 = float(ring[:, 2].min()), float(ring[:, 2].max())
@@ -439,6 +441,43 @@ def _bottom_probes(model: ObjectModel, centres: FloatArray, rho: float, gap: flo
             )
         )
     return out
+
+
+def _off_line_probes(
+    face: Face, n: FloatArray, ring: FloatArray, centres: FloatArray, rho: float
+) -> list[Probe]:
+    """A probe off the line of a side face's tip centres, when they lie along one line.
+
+    Probes that touch a face slide a little: two of them, at two heights, leave the face's
+    centres along one line, which fits any plane through it, so the face keeps its sensor's
+    quantised normal (and four such faces meeting at an apex split it). One more touch
+    across the line fits the plane: halfway from the line to the face's far side, approached
+    along the face's normal. None when the face is narrower than the tip across the line.
+    """
+    pts = centres[list(face.contacts)]
+    if len(pts) < 2:
+        return []
+    mid = pts.mean(axis=0)
+    _, _, vt = np.linalg.svd(pts - mid, full_matrices=False)
+    across = np.cross(n, vt[0])
+    length = float(np.linalg.norm(across))
+    if length < 1e-9:
+        return []
+    across /= length
+    surface = mid - rho * n
+    side = (ring - surface) @ across
+    far = float(side.max()) if side.max() >= -side.min() else float(side.min())
+    if abs(far) < 2.0 * rho:
+        return []
+    point = surface + 0.5 * far * across
+    return [
+        Probe(
+            _v(point + rho * n),
+            _v(n),
+            4.0 * rho,
+            f"the face facing {_name(n)} touched along one line",
+        )
+    ]
 
 
 def _top_probes(face: Face, ring: FloatArray, centres: FloatArray, rho: float) -> list[Probe]:

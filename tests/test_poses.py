@@ -300,3 +300,19 @@ def test_a_pyramid_on_a_lateral_face_is_probed_again_nearer_its_touches(
     assert (np.abs(truth[:, 2]) < 0.99).sum() == 5  # the base is not on the table
     r = classify(m, rules="polyhedra")
     assert r.decision.label == "pyramid"
+
+
+def test_a_face_touched_along_one_line_is_touched_off_it() -> None:
+    # ground truth: a hexagonal pyramid on a lateral face; two probes touched one of its faces
+    # at two heights but along one line (each probe slides a little), which fits no plane: the
+    # quantised normals of such faces split the apex, unless one more touch off the line fits it
+    m = _stable(solids.rotate_about_z(solids.pyramid(6, 0.0315, 0.0405), 357.8), 3, 316.0)
+    truth = np.unique(np.round(m.face_normals, 6), axis=0)
+    assert len(truth) == 7
+    r = classify(m, rules="polyhedra")
+    assert r.decision.label == "pyramid"
+    # the apex is one vertex: no edge of the model is short (the construction's are ≥ 3 cm)
+    poly = r.model.polyhedron
+    assert poly is not None
+    lengths = [float(np.linalg.norm(poly.vertices[i] - poly.vertices[j])) for i, j in poly.edges]
+    assert min(lengths) > 0.01
