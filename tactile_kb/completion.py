@@ -40,7 +40,7 @@ import numpy as np
 
 from tactile_kb.errors import TactileKBError, UsageError
 from tactile_kb.geometry.model import ObjectModel, build_model
-from tactile_kb.geometry.planes import Face
+from tactile_kb.geometry.planes import Face, nearest_points
 from tactile_kb.geometry.polyhedron import Polyhedron
 from tactile_kb.record import ExplorationRecord
 from tactile_kb.settings import DEFAULTS, current
@@ -58,6 +58,13 @@ __all__ = [
 ]
 
 _SIDES = 8  # horizontal directions checked for a side never touched (every 45°)
+
+_PATH = "the path passes inside the model"
+
+PATH_PROBES = 4
+"""At most this many probes where a contour's path passed inside the model
+(:func:`completion_probes`) per exploration: tests of a corner the envelope may have wrong,
+never items that hold the completion open."""
 
 TOP_NZ = DEFAULTS.explore.top_nz
 """A face whose normal's z component is at least this is a top, probed from above when its tip
@@ -208,7 +215,69 @@ def completion_probes(model: ObjectModel, *, height_gap: float | None = None) ->
     # made it look concave (an overhanging side read as vertical)
     probes += _one_height_probes(model, centres, rho, gap, concave=True)
     probes += _low_side_probes(model, centres, rho)
+    probes += _free_path_probes(model, rho)
     return probes
+
+
+def _free_path_probes(model: ObjectModel, rho: float, *, most: int = 4) -> list[Probe]:
+    """Probes where the finger passed through what the model says is the object.
+
+    The tip centre moved freely along the contour layers' paths: the object lies at least ρ
+    from every point of them (a touch stops the motion there, a slide keeps ρ). Where the path comes
+    nearer than that to the model's convex envelope, by more than a quarter of ρ (and 3σ of
+    noise), the envelope reaches where the object does not: a corner the contour went round
+    is cut by a face no touch found (a lying frustum's small end). One probe at the deepest
+    such point of each stretch, approached along the direction from the envelope to it; at
+    most ``most``, deepest first. None for a non-convex model, whose envelope spans its
+    hollows.
+    """
+    poly = model.polyhedron
+    paths = [np.asarray(layer.path, dtype=float).reshape(-1, 3) for layer in model.record.layers]
+    paths = [p for p in paths if len(p) >= 2]
+    if poly is None or not model.convex or not paths:
+        return []
+    tol = 0.25 * rho + 3.0 * model.record.noise
+    # the contour paths' segments sampled every quarter ρ
+    a = np.vstack([p[:-1] for p in paths])
+    b = np.vstack([p[1:] for p in paths])
+    steps = np.maximum(1, np.ceil(np.linalg.norm(b - a, axis=1) / (0.25 * rho))).astype(int)
+    t = np.concatenate([np.arange(k) / k for k in steps])
+    seg = np.repeat(np.arange(len(a)), steps)
+    x = np.vstack([a[seg] + t[:, None] * (b[seg] - a[seg]), b[-1:]])
+    # a point further than ρ − tol from some face's plane is at least that far from the
+    # envelope; the others' exact distance from its nearest point
+    near = np.flatnonzero((x @ poly.normals.T - poly.offsets).max(axis=1) < rho - tol)
+    if len(near) == 0:
+        return []
+    q = nearest_points(x[near], poly.normals, poly.offsets)
+    gap = x[near] - q
+    dist = np.linalg.norm(gap, axis=1)
+    deep = dist < rho - tol
+    if not deep.any():
+        return []
+    pts, qs, ds = x[near][deep], q[deep], dist[deep]
+    out: list[Probe] = []
+    taken: list[FloatArray] = []
+    for i in np.argsort(ds):
+        c = pts[i]
+        if any(float(np.linalg.norm(c - p)) < 4.0 * rho for p in taken):
+            continue
+        if ds[i] > 1e-9:
+            n = (c - qs[i]) / ds[i]
+        else:  # on the envelope's surface: the nearest face's normal
+            n = poly.normals[int(np.argmax(poly.normals @ c - poly.offsets))]
+        taken.append(c)
+        out.append(
+            Probe(
+                _v(c),
+                _v(n),
+                4.0 * rho,
+                f"{_PATH} at {_name(c * 1000.0)} mm",
+            )
+        )
+        if len(out) >= most:
+            break
+    return out
 
 
 def _modelled_face(model: ObjectModel, k: int) -> tuple[Face, FloatArray] | None:
@@ -582,7 +651,28 @@ class ModelCompleter:
         self.params = params or DEFAULT_COMPLETION
         self._start: tuple[int, float] | None = None
         self._tried: Counter[str] = Counter()
+        self._path_probes = 0
         self.probes = 0
+
+    def _budget(self, record: ExplorationRecord, model: ObjectModel) -> tuple[int, float]:
+        """The completion's touch and path budgets for ``record``."""
+        # many-faced objects get two touches a face (an icosahedron: 40)
+        faces = sum(1 for f in model.faces if f.source == "contacts")
+        budget = max(self.params.touches, 2 * faces) if self.params.touches else 0
+        scale = budget / self.params.touches if self.params.touches else 1.0
+        # a probe goes round the object: large objects get path in proportion to their size
+        centres = np.asarray([c.centre for c in record.contacts], dtype=float).reshape(-1, 3)
+        size = float(np.linalg.norm(np.ptp(centres, axis=0))) if len(centres) else 0.0
+        return budget, max(self.params.path * scale, 3.0 * size * budget)
+
+    def _spent(self, record: ExplorationRecord, model: ObjectModel) -> bool:
+        """True when the completion's budget is spent (checked only with nothing open)."""
+        assert self._start is not None
+        budget, allowed = self._budget(record, model)
+        return (
+            record.touches - self._start[0] >= budget
+            or record.path_length - self._start[1] >= allowed
+        )
 
     def next_probe(
         self, record: ExplorationRecord, last: tuple[Probe, bool] | None
@@ -595,14 +685,19 @@ class ModelCompleter:
         except (TactileKBError, np.linalg.LinAlgError, ValueError) as exc:
             text = f"the model cannot be built after {record.touches} touches: {exc}"
             return Ending("unreachable", text, (str(exc),))
-        wanted = completion_probes(model, height_gap=self.params.height_gap)
-        open_items = [p.reason for p in wanted]
+        wanted = [
+            p
+            for p in completion_probes(model, height_gap=self.params.height_gap)
+            if not p.reason.startswith(_PATH)
+            or (self._path_probes < PATH_PROBES and not self._tried[p.reason])
+        ]
+        open_items = [p.reason for p in wanted if not p.reason.startswith(_PATH)]
         if model.polyhedron is None and not wanted:
             open_items = [model.open_reason or "the model is open"]
         todo = [p for p in wanted if self._tried[p.reason] < self.params.attempts]
         touches = record.touches - self._start[0]
         path = record.path_length - self._start[1]
-        if not open_items:
+        if not open_items and (not wanted or self._spent(record, model)):
             return Ending(
                 "closed",
                 f"the model is closed and every side face has tip centres at two heights "
@@ -619,14 +714,7 @@ class ModelCompleter:
                 f"{what} after {record.touches} touches; unreachable: " + "; ".join(open_items),
                 tuple(open_items),
             )
-        # many-faced objects get two touches a face (an icosahedron: 40)
-        faces = sum(1 for f in model.faces if f.source == "contacts")
-        budget = max(self.params.touches, 2 * faces) if self.params.touches else 0
-        scale = budget / self.params.touches if self.params.touches else 1.0
-        # a probe goes round the object: large objects get path in proportion to their size
-        centres = np.asarray([c.centre for c in record.contacts], dtype=float).reshape(-1, 3)
-        size = float(np.linalg.norm(np.ptp(centres, axis=0))) if len(centres) else 0.0
-        allowed = max(self.params.path * scale, 3.0 * size * budget)
+        budget, allowed = self._budget(record, model)
         if touches >= budget or path >= allowed:
             return Ending(
                 "budget",
@@ -647,6 +735,7 @@ class ModelCompleter:
         ):
             probe = _nearer_the_touches(record, probe)
         self._tried[probe.reason] += 1
+        self._path_probes += probe.reason.startswith(_PATH)
         return probe
 
 

@@ -316,3 +316,24 @@ def test_a_face_touched_along_one_line_is_touched_off_it() -> None:
     assert poly is not None
     lengths = [float(np.linalg.norm(poly.vertices[i] - poly.vertices[j])) for i, j in poly.edges]
     assert min(lengths) > 0.01
+
+
+@pytest.mark.parametrize(("pose", "turn"), [(0, 307.0), (1, 50.0)])
+def test_a_corner_the_contour_went_round_inside_the_model_is_probed(pose: int, turn: float) -> None:
+    # ground truth: a small triangular frustum lying on a side; its small end overhangs a
+    # little and no layer touches it, so the three sides close into a tetrahedron, whose
+    # corner the layer's path went round inside of: a probe there finds the small end
+    m = _stable(solids.rotate_about_z(solids.frustum(3, 0.0194, 0.0096, 0.02), 268.0), pose, turn)
+    truth = np.unique(np.round(m.face_normals, 6), axis=0)
+    assert len(truth) == 5
+    r = classify(m, rules="polyhedra")
+    assert r.decision.label == "frustum"
+    poly = r.model.polyhedron
+    assert poly is not None
+    assert len(poly.faces) == 5
+    # every face of the construction is in the model (the small end, touched once, within
+    # the sensors' quantisation)
+    for n in truth:
+        assert float(np.max(poly.normals @ n)) >= math.cos(math.radians(15.0)), n
+    assert (r.record.ending == "closed") == (not r.record.unreachable)
+    assert any(c.phase == "complete" for c in r.record.contacts)
