@@ -215,8 +215,46 @@ def completion_probes(model: ObjectModel, *, height_gap: float | None = None) ->
     # made it look concave (an overhanging side read as vertical)
     probes += _one_height_probes(model, centres, rho, gap, concave=True)
     probes += _low_side_probes(model, centres, rho)
+    probes += _beyond_model_probes(model, rho)
     probes += _free_path_probes(model, rho)
     return probes
+
+
+def _beyond_model_probes(model: ObjectModel, rho: float) -> list[Probe]:
+    """Probes from each side along x and y where the visual hint box (an axis-aligned box: its
+    corners need not be the object's) reaches further than the model by more than 2 ρ.
+
+    The controller records the hint box it was given (the object's visual extent, ``hint_lo_*``
+    and ``hint_hi_*`` in ``record.params``). The contour layers lie at fixed fractions of its
+    height: a part of the object lower than the first layer (an L-block's foot, standing on
+    its end) or higher than the last is never touched, and the envelope of the rest stops
+    short of the hint there. One probe from that side just above the table, aimed at the
+    hint's middle: it meets the part, or the face the model has.
+    """
+    params = model.record.params
+    keys = [f"hint_{e}_{a}" for e in ("lo", "hi") for a in "xyz"]
+    poly = model.polyhedron
+    if poly is None or not all(k in params for k in keys):
+        return []
+    lo = np.array([params[k] for k in keys[:3]])
+    hi = np.array([params[k] for k in keys[3:]])
+    corners = np.array([[x, y] for x in (lo[0], hi[0]) for y in (lo[1], hi[1])])
+    mid = 0.5 * (lo + hi)
+    reach = float(np.linalg.norm(hi[:2] - lo[:2])) + 4.0 * rho
+    out = []
+    for d in np.array([[1.0, 0.0], [0.0, 1.0], [-1.0, 0.0], [0.0, -1.0]]):
+        if float((corners @ d).max() - (poly.vertices[:, :2] @ d).max()) <= 2.0 * rho:
+            continue
+        out.append(
+            Probe(
+                (float(mid[0]), float(mid[1]), 1.5 * rho),
+                (float(d[0]), float(d[1]), 0.0),
+                reach,
+                f"the hint reaches beyond the model towards {_name(np.append(d, 0.0))}",
+                middle=True,
+            )
+        )
+    return out
 
 
 def _free_path_probes(model: ObjectModel, rho: float, *, most: int = 4) -> list[Probe]:
@@ -612,6 +650,21 @@ def _over_the_rim(record: ExplorationRecord, probe: Probe) -> Probe:
     return Probe(_v(point), probe.normal, probe.reach, probe.reason, middle=False)
 
 
+def _at_the_far_touches(record: ExplorationRecord, probe: Probe) -> Probe:
+    """``probe`` (towards an open side) again, at the height of the touch that reached
+    furthest that way: the first, at the middle of the touched heights, met what was there
+    already (the face above an L-block's foot, concave), and the part still open lies at
+    the height where the touches went furthest."""
+    d = np.asarray(probe.normal, dtype=float)
+    centres = np.asarray([c.centre for c in record.contacts], dtype=float).reshape(-1, 3)
+    z = float(centres[int(np.argmax(centres @ d)), 2])
+    if abs(z - probe.target[2]) < record.tip_radius:
+        return probe
+    return Probe(
+        (probe.target[0], probe.target[1], z), probe.normal, probe.reach, probe.reason, middle=True
+    )
+
+
 def _nearer_the_touches(record: ExplorationRecord, probe: Probe) -> Probe:
     """``probe`` (approached sideways) again, aimed halfway to the nearest tip centre that
     touched a surface facing about the same way (within 45°).
@@ -727,6 +780,8 @@ class ModelCompleter:
         probe = todo[0]
         if probe.reason == "open towards +z" and self._tried[probe.reason]:
             probe = _over_the_rim(record, probe)
+        elif probe.reason.startswith("open towards") and self._tried[probe.reason]:
+            probe = _at_the_far_touches(record, probe)
         elif (
             self._tried[probe.reason]
             and last is not None

@@ -337,3 +337,17 @@ def test_a_corner_the_contour_went_round_inside_the_model_is_probed(pose: int, t
         assert float(np.max(poly.normals @ n)) >= math.cos(math.radians(15.0)), n
     assert (r.record.ending == "closed") == (not r.record.unreachable)
     assert any(c.phase == "complete" for c in r.record.contacts)
+
+
+@pytest.mark.parametrize(("pose", "turn"), [(2, 128.0), (4, 243.0)])
+def test_an_l_block_standing_on_its_end_has_its_foot_found(pose: int, turn: float) -> None:
+    # ground truth: an L-block standing on an end: its foot lies below the first contour
+    # layer, so the layers touch the leg only; the hint box (the object's visual extent)
+    # reaches past the leg's envelope, a probe from that side near the table meets the foot,
+    # and its touches beyond the leg's (now concave) face are kept as a face
+    m = _stable(solids.l_shape(0.0839, 0.0776, 0.0255, 0.0344), pose, turn)
+    truth = np.unique(np.round(m.face_normals, 6), axis=0)
+    assert len(truth) == 6  # two pairs of opposite faces are parallel, not one face each
+    r = classify(m, rules="parallelepipeds")
+    assert r.decision.label == "not_hexahedron"
+    assert not r.model.convex

@@ -354,7 +354,9 @@ def _far_from_edges(
     the median, further from every edge than that (plus ρ for the model's own error, and
     3 σ of noise) touched a face the others do not have: a corner cut off the envelope (a
     lying octagonal prism's slanted side, met by one layer near its lower edge), not an
-    edge. Such faces stay.
+    edge. So did a row whose tip centres lie, in the median, further than 1.25 ρ (and 3 σ)
+    outside that polyhedron: an edge's touch is ρ from it, a rounded edge's nearer; one
+    further out met a part beyond a concave face (an L-block's foot). Such faces stay.
     """
     if not drop:
         return drop
@@ -385,7 +387,8 @@ def _far_from_edges(
         on = np.abs(q @ poly.normals.T - poly.offsets) <= 1e-6
         width = np.where(on, widths[None, :], 0.0).max(axis=1)
         allowed = rounding * width + rho + 3.0 * noise
-        if float(np.median(far - allowed)) <= 0.0:
+        beyond = np.linalg.norm(c - q, axis=1) - rho - 0.25 * rho - 3.0 * noise
+        if float(np.median(far - allowed)) <= 0.0 and float(np.median(beyond)) <= 0.0:
             out.append(k)
     return out
 
