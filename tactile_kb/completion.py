@@ -60,11 +60,13 @@ __all__ = [
 _SIDES = 8  # horizontal directions checked for a side never touched (every 45°)
 
 _PATH = "the path passes inside the model"
+_HINT = "the hint reaches beyond the model"
+_TESTS = (_PATH, _HINT)  # probes that test the model, never holding the completion open
 
 PATH_PROBES = 4
-"""At most this many probes where a contour's path passed inside the model
-(:func:`completion_probes`) per exploration: tests of a corner the envelope may have wrong,
-never items that hold the completion open."""
+"""At most this many probes per exploration where a contour's path passed inside the model, or
+the hint box reaches past it (:func:`completion_probes`): tests of a corner or a part the
+envelope may have wrong, each tried once, never items that hold the completion open."""
 
 TOP_NZ = DEFAULTS.explore.top_nz
 """A face whose normal's z component is at least this is a top, probed from above when its tip
@@ -229,7 +231,9 @@ def _beyond_model_probes(model: ObjectModel, rho: float) -> list[Probe]:
     height: a part of the object lower than the first layer (an L-block's foot, standing on
     its end) or higher than the last is never touched, and the envelope of the rest stops
     short of the hint there. One probe from that side just above the table, aimed at the
-    hint's middle: it meets the part, or the face the model has.
+    hint's middle: it meets the part, or the face the model has. A hint is an estimate (a
+    scan's floating specks widen it): like the path's, these probes test the model and never
+    hold the completion open.
     """
     params = model.record.params
     keys = [f"hint_{e}_{a}" for e in ("lo", "hi") for a in "xyz"]
@@ -250,7 +254,7 @@ def _beyond_model_probes(model: ObjectModel, rho: float) -> list[Probe]:
                 (float(mid[0]), float(mid[1]), 1.5 * rho),
                 (float(d[0]), float(d[1]), 0.0),
                 reach,
-                f"the hint reaches beyond the model towards {_name(np.append(d, 0.0))}",
+                f"{_HINT} towards {_name(np.append(d, 0.0))}",
                 middle=True,
             )
         )
@@ -741,10 +745,10 @@ class ModelCompleter:
         wanted = [
             p
             for p in completion_probes(model, height_gap=self.params.height_gap)
-            if not p.reason.startswith(_PATH)
+            if not p.reason.startswith(_TESTS)
             or (self._path_probes < PATH_PROBES and not self._tried[p.reason])
         ]
-        open_items = [p.reason for p in wanted if not p.reason.startswith(_PATH)]
+        open_items = [p.reason for p in wanted if not p.reason.startswith(_TESTS)]
         if model.polyhedron is None and not wanted:
             open_items = [model.open_reason or "the model is open"]
         todo = [p for p in wanted if self._tried[p.reason] < self.params.attempts]
@@ -790,7 +794,7 @@ class ModelCompleter:
         ):
             probe = _nearer_the_touches(record, probe)
         self._tried[probe.reason] += 1
-        self._path_probes += probe.reason.startswith(_PATH)
+        self._path_probes += probe.reason.startswith(_TESTS)
         return probe
 
 
