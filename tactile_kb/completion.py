@@ -59,6 +59,11 @@ __all__ = [
 
 _SIDES = 8  # horizontal directions checked for a side never touched (every 45°)
 
+RESOLVING_SENSORS = 8
+"""A face touched along one line is probed off it (:func:`completion_probes`) only with a finger
+of at least this many sensors: fewer (a tripod, the paper's 4-sensor equator) read a face's
+normal no better than its neighbours', and a touch off the line then fits nothing new."""
+
 _PATH = "the path passes inside the model"
 _HINT = "the hint reaches beyond the model"
 _TESTS = (_PATH, _HINT)  # probes that test the model, never holding the completion open
@@ -182,7 +187,7 @@ def completion_probes(model: ObjectModel, *, height_gap: float | None = None) ->
             continue  # tops and the table: not probed at another height
         zs = centres[list(face.contacts), 2] if face.contacts else np.zeros(0)
         if len(zs) and float(zs.max() - zs.min()) >= gap:
-            if not face.refined:
+            if not face.refined and len(record.sensor_directions) >= RESOLVING_SENSORS:
                 probes += _off_line_probes(face, n, poly.vertices[list(verts)], centres, rho)
             continue
         ring = poly.vertices[list(verts)]
