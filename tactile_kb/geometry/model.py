@@ -378,6 +378,9 @@ def _far_from_edges(
     out = []
     for k in drop:
         c = centres[list(faces[k].contacts)]
+        if len(c) < 3:
+            out.append(k)  # one or two touches are no row: an edge's, as edge_faces said
+            continue
         q = nearest_points(c, poly.normals, poly.offsets)
         seg = b - a
         t = np.clip(
