@@ -40,7 +40,7 @@ import numpy as np
 
 from tactile_kb.errors import TactileKBError, UsageError
 from tactile_kb.geometry.model import ObjectModel, build_model
-from tactile_kb.geometry.planes import Face
+from tactile_kb.geometry.planes import Face, nearest_points
 from tactile_kb.geometry.polyhedron import Polyhedron
 from tactile_kb.record import ExplorationRecord
 from tactile_kb.settings import DEFAULTS, current
@@ -58,6 +58,20 @@ __all__ = [
 ]
 
 _SIDES = 8  # horizontal directions checked for a side never touched (every 45°)
+
+RESOLVING_SENSORS = 8
+"""A face touched along one line is probed off it (:func:`completion_probes`) only with a finger
+of at least this many sensors: fewer (a tripod, the paper's 4-sensor equator) read a face's
+normal no better than its neighbours', and a touch off the line then fits nothing new."""
+
+_PATH = "the path passes inside the model"
+_HINT = "the hint reaches beyond the model"
+_TESTS = (_PATH, _HINT)  # probes that test the model, never holding the completion open
+
+PATH_PROBES = 4
+"""At most this many probes per exploration where a contour's path passed inside the model, or
+the hint box reaches past it (:func:`completion_probes`): tests of a corner or a part the
+envelope may have wrong, each tried once, never items that hold the completion open."""
 
 TOP_NZ = DEFAULTS.explore.top_nz
 """A face whose normal's z component is at least this is a top, probed from above when its tip
@@ -186,6 +200,8 @@ def completion_probes(model: ObjectModel, *, height_gap: float | None = None) ->
             continue  # tops and the table: not probed at another height
         zs = centres[list(face.contacts), 2] if face.contacts else np.zeros(0)
         if len(zs) and float(zs.max() - zs.min()) >= gap:
+            if not face.refined and len(record.sensor_directions) >= RESOLVING_SENSORS:
+                probes += _off_line_probes(face, n, poly.vertices[list(verts)], centres, rho)
             continue
         ring = poly.vertices[list(verts)]
         z0, z1 = float(ring[:, 2].min()), float(ring[:, 2].max())
@@ -220,7 +236,109 @@ def completion_probes(model: ObjectModel, *, height_gap: float | None = None) ->
     # made it look concave (an overhanging side read as vertical)
     probes += _one_height_probes(model, centres, rho, gap, concave=True)
     probes += _low_side_probes(model, centres, rho)
+    probes += _beyond_model_probes(model, rho)
+    probes += _free_path_probes(model, rho)
     return probes
+
+
+def _beyond_model_probes(model: ObjectModel, rho: float) -> list[Probe]:
+    """Probes from each side along x and y where the visual hint box (an axis-aligned box: its
+    corners need not be the object's) reaches further than the model by more than 2 ρ.
+
+    The controller records the hint box it was given (the object's visual extent, ``hint_lo_*``
+    and ``hint_hi_*`` in ``record.params``). The contour layers lie at fixed fractions of its
+    height: a part of the object lower than the first layer (an L-block's foot, standing on
+    its end) or higher than the last is never touched, and the envelope of the rest stops
+    short of the hint there. One probe from that side just above the table, aimed at the
+    hint's middle: it meets the part, or the face the model has. A hint is an estimate (a
+    scan's floating specks widen it): like the path's, these probes test the model and never
+    hold the completion open.
+    """
+    params = model.record.params
+    keys = [f"hint_{e}_{a}" for e in ("lo", "hi") for a in "xyz"]
+    poly = model.polyhedron
+    if poly is None or not all(k in params for k in keys):
+        return []
+    lo = np.array([params[k] for k in keys[:3]])
+    hi = np.array([params[k] for k in keys[3:]])
+    corners = np.array([[x, y] for x in (lo[0], hi[0]) for y in (lo[1], hi[1])])
+    mid = 0.5 * (lo + hi)
+    reach = float(np.linalg.norm(hi[:2] - lo[:2])) + 4.0 * rho
+    out = []
+    for d in np.array([[1.0, 0.0], [0.0, 1.0], [-1.0, 0.0], [0.0, -1.0]]):
+        if float((corners @ d).max() - (poly.vertices[:, :2] @ d).max()) <= 2.0 * rho:
+            continue
+        out.append(
+            Probe(
+                (float(mid[0]), float(mid[1]), 1.5 * rho),
+                (float(d[0]), float(d[1]), 0.0),
+                reach,
+                f"{_HINT} towards {_name(np.append(d, 0.0))}",
+                middle=True,
+            )
+        )
+    return out
+
+
+def _free_path_probes(model: ObjectModel, rho: float, *, most: int = 4) -> list[Probe]:
+    """Probes where the finger passed through what the model says is the object.
+
+    The tip centre moved freely along the contour layers' paths: the object lies at least ρ
+    from every point of them (a touch stops the motion there, a slide keeps ρ). Where the path comes
+    nearer than that to the model's convex envelope, by more than a quarter of ρ (and 3σ of
+    noise), the envelope reaches where the object does not: a corner the contour went round
+    is cut by a face no touch found (a lying frustum's small end). One probe at the deepest
+    such point of each stretch, approached along the direction from the envelope to it; at
+    most ``most``, deepest first. None for a non-convex model, whose envelope spans its
+    hollows.
+    """
+    poly = model.polyhedron
+    paths = [np.asarray(layer.path, dtype=float).reshape(-1, 3) for layer in model.record.layers]
+    paths = [p for p in paths if len(p) >= 2]
+    if poly is None or not model.convex or not paths:
+        return []
+    tol = 0.25 * rho + 3.0 * model.record.noise
+    # the contour paths' segments sampled every quarter ρ
+    a = np.vstack([p[:-1] for p in paths])
+    b = np.vstack([p[1:] for p in paths])
+    steps = np.maximum(1, np.ceil(np.linalg.norm(b - a, axis=1) / (0.25 * rho))).astype(int)
+    t = np.concatenate([np.arange(k) / k for k in steps])
+    seg = np.repeat(np.arange(len(a)), steps)
+    x = np.vstack([a[seg] + t[:, None] * (b[seg] - a[seg]), b[-1:]])
+    # a point further than ρ − tol from some face's plane is at least that far from the
+    # envelope; the others' exact distance from its nearest point
+    near = np.flatnonzero((x @ poly.normals.T - poly.offsets).max(axis=1) < rho - tol)
+    if len(near) == 0:
+        return []
+    q = nearest_points(x[near], poly.normals, poly.offsets)
+    gap = x[near] - q
+    dist = np.linalg.norm(gap, axis=1)
+    deep = dist < rho - tol
+    if not deep.any():
+        return []
+    pts, qs, ds = x[near][deep], q[deep], dist[deep]
+    out: list[Probe] = []
+    taken: list[FloatArray] = []
+    for i in np.argsort(ds):
+        c = pts[i]
+        if any(float(np.linalg.norm(c - p)) < 4.0 * rho for p in taken):
+            continue
+        if ds[i] > 1e-9:
+            n = (c - qs[i]) / ds[i]
+        else:  # on the envelope's surface: the nearest face's normal
+            n = poly.normals[int(np.argmax(poly.normals @ c - poly.offsets))]
+        taken.append(c)
+        out.append(
+            Probe(
+                _v(c),
+                _v(n),
+                4.0 * rho,
+                f"{_PATH} at {_name(c * 1000.0)} mm",
+            )
+        )
+        if len(out) >= most:
+            break
+    return out
 
 
 def _modelled_face(model: ObjectModel, k: int) -> tuple[Face, FloatArray] | None:
@@ -455,6 +573,43 @@ def _bottom_probes(model: ObjectModel, centres: FloatArray, rho: float, gap: flo
     return out
 
 
+def _off_line_probes(
+    face: Face, n: FloatArray, ring: FloatArray, centres: FloatArray, rho: float
+) -> list[Probe]:
+    """A probe off the line of a side face's tip centres, when they lie along one line.
+
+    Probes that touch a face slide a little: two of them, at two heights, leave the face's
+    centres along one line, which fits any plane through it, so the face keeps its sensor's
+    quantised normal (and four such faces meeting at an apex split it). One more touch
+    across the line fits the plane: halfway from the line to the face's far side, approached
+    along the face's normal. None when the face is narrower than the tip across the line.
+    """
+    pts = centres[list(face.contacts)]
+    if len(pts) < 2:
+        return []
+    mid = pts.mean(axis=0)
+    _, _, vt = np.linalg.svd(pts - mid, full_matrices=False)
+    across = np.cross(n, vt[0])
+    length = float(np.linalg.norm(across))
+    if length < 1e-9:
+        return []
+    across /= length
+    surface = mid - rho * n
+    side = (ring - surface) @ across
+    far = float(side.max()) if side.max() >= -side.min() else float(side.min())
+    if abs(far) < 2.0 * rho:
+        return []
+    point = surface + 0.5 * far * across
+    return [
+        Probe(
+            _v(point + rho * n),
+            _v(n),
+            4.0 * rho,
+            f"the face facing {_name(n)} touched along one line",
+        )
+    ]
+
+
 def _top_probes(face: Face, ring: FloatArray, centres: FloatArray, rho: float) -> list[Probe]:
     """Probes from above beside a top whose tip centres lie along one line.
 
@@ -518,6 +673,43 @@ def _over_the_rim(record: ExplorationRecord, probe: Probe) -> Probe:
     return Probe(_v(point), probe.normal, probe.reach, probe.reason, middle=False)
 
 
+def _at_the_far_touches(record: ExplorationRecord, probe: Probe) -> Probe:
+    """``probe`` (towards an open side) again, at the height of the touch that reached
+    furthest that way: the first, at the middle of the touched heights, met what was there
+    already (the face above an L-block's foot, concave), and the part still open lies at
+    the height where the touches went furthest."""
+    d = np.asarray(probe.normal, dtype=float)
+    centres = np.asarray([c.centre for c in record.contacts], dtype=float).reshape(-1, 3)
+    z = float(centres[int(np.argmax(centres @ d)), 2])
+    if abs(z - probe.target[2]) < record.tip_radius:
+        return probe
+    return Probe(
+        (probe.target[0], probe.target[1], z), probe.normal, probe.reach, probe.reason, middle=True
+    )
+
+
+def _nearer_the_touches(record: ExplorationRecord, probe: Probe) -> Probe:
+    """``probe`` (approached sideways) again, aimed halfway to the nearest tip centre that
+    touched a surface facing about the same way (within 45°).
+
+    A probe placed from the model at a face's other height, or near the table, found nothing:
+    the model's face there extends beyond the object (its normal is the sensor's, quantised,
+    or a face the model lacks cuts it off). The same probe again would find nothing again;
+    halfway to where that face was touched it lies on the object if the face reaches there.
+    """
+    n = np.asarray(probe.normal, dtype=float)
+    centres = np.asarray([c.centre for c in record.contacts], dtype=float).reshape(-1, 3)
+    normals = -np.asarray([c.direction for c in record.contacts], dtype=float).reshape(-1, 3)
+    near = normals @ n >= math.cos(math.radians(45.0))
+    if not near.any():
+        return probe
+    target = np.asarray(probe.target, dtype=float)
+    pool = centres[near]
+    nearest = pool[int(np.argmin(np.linalg.norm(pool - target, axis=1)))]
+    moved = 0.5 * (target + nearest)
+    return Probe(_v(moved), probe.normal, probe.reach, probe.reason, facing=probe.facing)
+
+
 def _v(a: FloatArray) -> tuple[float, float, float]:
     return (float(a[0]), float(a[1]), float(a[2]))
 
@@ -535,7 +727,29 @@ class ModelCompleter:
         self.params = params or DEFAULT_COMPLETION
         self._start: tuple[int, float] | None = None
         self._tried: Counter[str] = Counter()
+        self._path_probes = 0
         self.probes = 0
+
+    def _budget(self, record: ExplorationRecord, model: ObjectModel) -> tuple[int, float]:
+        """The completion's touch and path budgets for ``record``."""
+        max_touches, max_path, _ = self.params.budget()
+        # many-faced objects get two touches a face (an icosahedron: 40)
+        faces = sum(1 for f in model.faces if f.source == "contacts")
+        budget = max(max_touches, 2 * faces) if max_touches else 0
+        scale = budget / max_touches if max_touches else 1.0
+        # a probe goes round the object: large objects get path in proportion to their size
+        centres = np.asarray([c.centre for c in record.contacts], dtype=float).reshape(-1, 3)
+        size = float(np.linalg.norm(np.ptp(centres, axis=0))) if len(centres) else 0.0
+        return budget, max(max_path * scale, 3.0 * size * budget)
+
+    def _spent(self, record: ExplorationRecord, model: ObjectModel) -> bool:
+        """True when the completion's budget is spent (checked only with nothing open)."""
+        assert self._start is not None
+        budget, allowed = self._budget(record, model)
+        return (
+            record.touches - self._start[0] >= budget
+            or record.path_length - self._start[1] >= allowed
+        )
 
     def next_probe(
         self, record: ExplorationRecord, last: tuple[Probe, bool] | None
@@ -548,15 +762,20 @@ class ModelCompleter:
         except (TactileKBError, np.linalg.LinAlgError, ValueError) as exc:
             text = f"the model cannot be built after {record.touches} touches: {exc}"
             return Ending("unreachable", text, (str(exc),))
-        wanted = completion_probes(model, height_gap=self.params.height_gap)
-        open_items = [p.reason for p in wanted]
+        wanted = [
+            p
+            for p in completion_probes(model, height_gap=self.params.height_gap)
+            if not p.reason.startswith(_TESTS)
+            or (self._path_probes < PATH_PROBES and not self._tried[p.reason])
+        ]
+        open_items = [p.reason for p in wanted if not p.reason.startswith(_TESTS)]
         if model.polyhedron is None and not wanted:
             open_items = [model.open_reason or "the model is open"]
-        max_touches, max_path, attempts = self.params.budget()
+        attempts = self.params.budget()[2]
         todo = [p for p in wanted if self._tried[p.reason] < attempts]
         touches = record.touches - self._start[0]
         path = record.path_length - self._start[1]
-        if not open_items:
+        if not open_items and (not wanted or self._spent(record, model)):
             return Ending(
                 "closed",
                 f"the model is closed and every side face has tip centres at two heights "
@@ -573,14 +792,7 @@ class ModelCompleter:
                 f"{what} after {record.touches} touches; unreachable: " + "; ".join(open_items),
                 tuple(open_items),
             )
-        # many-faced objects get two touches a face (an icosahedron: 40)
-        faces = sum(1 for f in model.faces if f.source == "contacts")
-        budget = max(max_touches, 2 * faces) if max_touches else 0
-        scale = budget / max_touches if max_touches else 1.0
-        # a probe goes round the object: large objects get path in proportion to their size
-        centres = np.asarray([c.centre for c in record.contacts], dtype=float).reshape(-1, 3)
-        size = float(np.linalg.norm(np.ptp(centres, axis=0))) if len(centres) else 0.0
-        allowed = max(max_path * scale, 3.0 * size * budget)
+        budget, allowed = self._budget(record, model)
         if touches >= budget or path >= allowed:
             return Ending(
                 "budget",
@@ -593,7 +805,17 @@ class ModelCompleter:
         probe = todo[0]
         if probe.reason == "open towards +z" and self._tried[probe.reason]:
             probe = _over_the_rim(record, probe)
+        elif probe.reason.startswith("open towards") and self._tried[probe.reason]:
+            probe = _at_the_far_touches(record, probe)
+        elif (
+            self._tried[probe.reason]
+            and last is not None
+            and not last[1]
+            and abs(probe.normal[2]) < 0.9
+        ):
+            probe = _nearer_the_touches(record, probe)
         self._tried[probe.reason] += 1
+        self._path_probes += probe.reason.startswith(_TESTS)
         return probe
 
 

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 
 import numpy as np
 import pytest
@@ -16,6 +17,7 @@ from tactile_kb.touch.finger import VERTICAL, Orientation, Wrist, builtin_finger
 from tactile_kb.touch.sensors import FaultySensors
 from tactile_kb.touch.stepper import StepperWorld
 from tactile_kb.touch.world import OrientableWorld
+from tactile_kb.types import FloatArray
 
 
 def _cube() -> trimesh.Trimesh:
@@ -225,3 +227,127 @@ def test_a_frustum_on_its_small_end_is_met_with_the_head_indexed() -> None:
     assert r.record.blind
     assert r.decision.label == "frustum"
     assert r.record.ending == "closed", r.record.unreachable
+
+
+def _slants(count: int, lo: float = 0.6, hi: float = 0.8) -> Callable[[FloatArray], bool]:
+    """A test of face normals: ``count`` of them have ``lo < |z| < hi``."""
+    return lambda n: int(((abs(n[:, 2]) > lo) & (abs(n[:, 2]) < hi)).sum()) == count
+
+
+def _posed(
+    m: trimesh.Trimesh, turn_deg: float, keep: Callable[[FloatArray], bool]
+) -> trimesh.Trimesh:
+    """``m`` in its most probable stable pose (trimesh's ``compute_stable_poses``) whose face
+    normals pass ``keep``, turned about z, centred on the table."""
+    transforms, probs = trimesh.poses.compute_stable_poses(m)
+    for k in np.argsort(-probs):
+        posed = m.copy()
+        posed.apply_transform(transforms[k])
+        if keep(np.unique(np.round(posed.face_normals, 6), axis=0)):
+            break
+    else:
+        raise AssertionError("no such stable pose")
+    posed.apply_translation(
+        (-posed.bounds.mean(axis=0)[0], -posed.bounds.mean(axis=0)[1], -posed.bounds[0][2])
+    )
+    return solids.rotate_about_z(posed, turn_deg)
+
+
+@pytest.mark.parametrize("turn", [0.0, 70.0])
+def test_a_lying_octagonal_prism_has_its_slanted_sides(turn: float) -> None:
+    # ground truth: on a side face, so four sides slant at 45° (two up, two overhanging), and
+    # the vertical finger's layers meet the upper ones at one height, near their lower edge:
+    # those touches are a face of their own, not the edge of a box
+    m = _posed(solids.prism(8, 0.0495, 0.0958), turn, _slants(4))
+    truth = np.unique(np.round(m.face_normals, 6), axis=0)
+    assert len(truth) == 10
+    slanted = [n for n in truth if 0.6 < abs(n[2]) < 0.8]
+    assert len(slanted) == 4
+    r = classify(m, rules="polyhedra")
+    assert r.decision.label == "prism"
+    poly = r.model.polyhedron
+    assert poly is not None
+    # every face the vertical finger can reach is in the model, within 3° (the two that
+    # overhang by 45° are met by no layer and leave no blind contact: not asked for here)
+    for n in truth:
+        if n[2] > -0.5:
+            assert float(np.max(poly.normals @ n)) >= math.cos(math.radians(3.0)), n
+
+
+def _stable(m: trimesh.Trimesh, k: int, turn_deg: float) -> trimesh.Trimesh:
+    """``m`` in its ``k``-th stable pose of probability ≥ 2 % (trimesh's order), turned about
+    z, centred on the table."""
+    transforms, probs = trimesh.poses.compute_stable_poses(m)
+    posed = m.copy()
+    posed.apply_transform([t for t, p in zip(transforms, probs, strict=True) if p >= 0.02][k])
+    posed.apply_translation(
+        (-posed.bounds.mean(axis=0)[0], -posed.bounds.mean(axis=0)[1], -posed.bounds[0][2])
+    )
+    return solids.rotate_about_z(posed, turn_deg)
+
+
+@pytest.mark.parametrize(("pose", "turn"), [(2, 66.0), (3, 347.0)])
+def test_a_pyramid_on_a_lateral_face_is_probed_again_nearer_its_touches(
+    pose: int, turn: float
+) -> None:
+    # ground truth: a pentagonal pyramid on a lateral face (its base stands tilted, one
+    # lateral face overhangs); the probes the model places at a face's other height miss the
+    # object while its normals are quantised, and are sent again nearer where it was touched
+    m = _stable(solids.rotate_about_z(solids.pyramid(5, 0.0518, 0.0547), 290.9), pose, turn)
+    truth = np.unique(np.round(m.face_normals, 6), axis=0)
+    assert len(truth) == 6
+    assert (truth[:, 2] < -0.99).sum() == 1  # on a face
+    assert (np.abs(truth[:, 2]) < 0.99).sum() == 5  # the base is not on the table
+    r = classify(m, rules="polyhedra")
+    assert r.decision.label == "pyramid"
+
+
+def test_a_face_touched_along_one_line_is_touched_off_it() -> None:
+    # ground truth: a hexagonal pyramid on a lateral face; two probes touched one of its faces
+    # at two heights but along one line (each probe slides a little), which fits no plane: the
+    # quantised normals of such faces split the apex, unless one more touch off the line fits it
+    m = _stable(solids.rotate_about_z(solids.pyramid(6, 0.0315, 0.0405), 357.8), 3, 316.0)
+    truth = np.unique(np.round(m.face_normals, 6), axis=0)
+    assert len(truth) == 7
+    r = classify(m, rules="polyhedra")
+    assert r.decision.label == "pyramid"
+    # the apex is one vertex: no edge of the model is short (the construction's are ≥ 3 cm)
+    poly = r.model.polyhedron
+    assert poly is not None
+    lengths = [float(np.linalg.norm(poly.vertices[i] - poly.vertices[j])) for i, j in poly.edges]
+    assert min(lengths) > 0.01
+
+
+@pytest.mark.parametrize(("pose", "turn"), [(0, 307.0), (1, 50.0)])
+def test_a_corner_the_contour_went_round_inside_the_model_is_probed(pose: int, turn: float) -> None:
+    # ground truth: a small triangular frustum lying on a side; its small end overhangs a
+    # little and no layer touches it, so the three sides close into a tetrahedron, whose
+    # corner the layer's path went round inside of: a probe there finds the small end
+    m = _stable(solids.rotate_about_z(solids.frustum(3, 0.0194, 0.0096, 0.02), 268.0), pose, turn)
+    truth = np.unique(np.round(m.face_normals, 6), axis=0)
+    assert len(truth) == 5
+    r = classify(m, rules="polyhedra")
+    assert r.decision.label == "frustum"
+    poly = r.model.polyhedron
+    assert poly is not None
+    assert len(poly.faces) == 5
+    # every face of the construction is in the model (the small end, touched once, within
+    # the sensors' quantisation)
+    for n in truth:
+        assert float(np.max(poly.normals @ n)) >= math.cos(math.radians(15.0)), n
+    assert (r.record.ending == "closed") == (not r.record.unreachable)
+    assert any(c.phase == "complete" for c in r.record.contacts)
+
+
+@pytest.mark.parametrize(("pose", "turn"), [(2, 128.0), (4, 243.0)])
+def test_an_l_block_standing_on_its_end_has_its_foot_found(pose: int, turn: float) -> None:
+    # ground truth: an L-block standing on an end: its foot lies below the first contour
+    # layer, so the layers touch the leg only; the hint box (the object's visual extent)
+    # reaches past the leg's envelope, a probe from that side near the table meets the foot,
+    # and its touches beyond the leg's (now concave) face are kept as a face
+    m = _stable(solids.l_shape(0.0839, 0.0776, 0.0255, 0.0344), pose, turn)
+    truth = np.unique(np.round(m.face_normals, 6), axis=0)
+    assert len(truth) == 6  # two pairs of opposite faces are parallel, not one face each
+    r = classify(m, rules="parallelepipeds")
+    assert r.decision.label == "not_hexahedron"
+    assert not r.model.convex

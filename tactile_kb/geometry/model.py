@@ -51,6 +51,7 @@ from tactile_kb.geometry.planes import (
     contact_arrays,
     edge_faces,
     merge_plane_arrays,
+    nearest_points,
 )
 from tactile_kb.geometry.polyhedron import (
     Polyhedron,
@@ -228,6 +229,7 @@ def build_model(
     edge_contacts: tuple[int, ...] = ()
     if edge_rounding is not None and len(faces) >= 5:
         drop = edge_faces(faces, arrays[0], record.tip_radius, noise=noise, rounding=edge_rounding)
+        drop = _far_from_edges(faces, drop, arrays[0], record.tip_radius, noise, edge_rounding)
         if drop:
             edge_contacts = tuple(sorted(i for k in drop for i in faces[k].contacts))
             faces = tuple(f for k, f in enumerate(faces) if k not in drop)
@@ -333,6 +335,75 @@ def build_model(
         options=options,
         face_of=face_of,
     )
+
+
+def _far_from_edges(
+    faces: tuple[Face, ...],
+    drop: list[int],
+    centres: FloatArray,
+    rho: float,
+    noise: float,
+    rounding: float,
+) -> list[int]:
+    """``drop`` without the faces whose touches lie far from every edge of the others.
+
+    :func:`~tactile_kb.geometry.planes.edge_faces` drops a narrow face whose tip centres the
+    other faces' polyhedron, grown by ρ, explains. A touch of an edge (sharp, or rounded with
+    a radius up to ``rounding`` × the face's width) has its nearest point on that polyhedron
+    at the edge, or within that radius of it. A row of touches whose nearest points lie, in
+    the median, further from every edge than that (plus ρ for the model's own error, and
+    3 σ of noise) touched a face the others do not have: a corner cut off the envelope (a
+    lying octagonal prism's slanted side, met by one layer near its lower edge), not an
+    edge. So did a row whose tip centres lie, in the median, further than 1.25 ρ (and 3 σ)
+    outside that polyhedron: an edge's touch is ρ from it, a rounded edge's nearer; one
+    further out met a part beyond a concave face (an L-block's foot). Such faces stay.
+    """
+    if not drop:
+        return drop
+    kept = [k for k in range(len(faces)) if k not in drop]
+    normals = np.asarray([faces[k].normal for k in kept], dtype=float).reshape(-1, 3)
+    offsets = np.asarray([faces[k].offset for k in kept], dtype=float)
+    pts = centres[[i for f in faces for i in f.contacts]]
+    bound = (pts.mean(axis=0), 3.0 * float(np.ptp(pts, axis=0).max()) + rho)
+    try:
+        poly = polyhedron_from_planes(normals, offsets, bound=bound)
+    except GeometryError:
+        return drop
+    v = poly.vertices
+    a = np.asarray([v[i] for i, _ in poly.edges], dtype=float).reshape(-1, 3)
+    b = np.asarray([v[j] for _, j in poly.edges], dtype=float).reshape(-1, 3)
+    if len(a) == 0:
+        return drop
+    widths = np.asarray([_face_width(poly, f) for f in range(len(poly.faces))])
+    out = []
+    for k in drop:
+        c = centres[list(faces[k].contacts)]
+        if len(c) < 3:
+            out.append(k)  # one or two touches are no row: an edge's, as edge_faces said
+            continue
+        q = nearest_points(c, poly.normals, poly.offsets)
+        seg = b - a
+        t = np.clip(
+            np.einsum("pij,ij->pi", q[:, None, :] - a[None], seg) / (seg * seg).sum(axis=1), 0, 1
+        )
+        far = np.linalg.norm(q[:, None, :] - (a[None] + t[..., None] * seg[None]), axis=2).min(1)
+        on = np.abs(q @ poly.normals.T - poly.offsets) <= 1e-6
+        width = np.where(on, widths[None, :], 0.0).max(axis=1)
+        allowed = rounding * width + rho + 3.0 * noise
+        beyond = np.linalg.norm(c - q, axis=1) - rho - 0.25 * rho - 3.0 * noise
+        if float(np.median(far - allowed)) <= 0.0 and float(np.median(beyond)) <= 0.0:
+            out.append(k)
+    return out
+
+
+def _face_width(poly: Polyhedron, face: int) -> float:
+    """The in-plane width of a polyhedron face: its extent across its longest direction."""
+    v = poly.vertices[list(poly.faces[face])]
+    if len(v) < 3:
+        return 0.0
+    centred = v - v.mean(axis=0)
+    _, _, vt = np.linalg.svd(centred, full_matrices=False)
+    return float(np.ptp(centred @ vt[1]))
 
 
 def _support(

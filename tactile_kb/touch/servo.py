@@ -451,6 +451,9 @@ class Controller:
             edge_slide=self.edge_slide,
             bump=self.bump,
         )
+        hint = self.world.hint
+        params.update({f"hint_lo_{a}": float(v) for a, v in zip("xyz", hint.lo, strict=True)})
+        params.update({f"hint_hi_{a}": float(v) for a, v in zip("xyz", hint.hi, strict=True)})
         params.update(self.extra_params)
         return ExplorationRecord(
             object=self.object_name,
