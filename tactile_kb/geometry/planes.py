@@ -708,6 +708,15 @@ def _merge_coplanar(
                 if spanning:  # the plane is the spanning group's
                     if joint.normal @ spanning[0].normal < cos_min:
                         continue
+                    if _beyond(
+                        centres,
+                        line,
+                        groups[i] if fits[i].refined else groups[j],
+                        fits[j if fits[i].refined else i].normal,
+                        spanning[0].normal,
+                        tol,
+                    ):
+                        continue
                     scatter = max(scale, _mad_sigma(spanning[0].residuals))
                 else:  # two lines (or spots) that together span a plane near both normals
                     if min(joint.normal @ fits[i].normal, joint.normal @ fits[j].normal) < (
@@ -724,6 +733,26 @@ def _merge_coplanar(
             changed = True
             break
     return groups
+
+
+def _beyond(
+    centres: FloatArray,
+    line: NDArray[np.intp],
+    face: NDArray[np.intp],
+    line_normal: FloatArray,
+    face_normal: FloatArray,
+    tol: float,
+) -> bool:
+    """True when the tip centres ``line``, whose normal tilts away from the face's, lie past
+    the face's touched extent in the direction of that tilt: where a fold would start (a
+    lying octagonal prism's slanted side, met by the layer above the vertical side's), not a
+    bump on the face (met between the face's own touches, or at their edge)."""
+    tilt = line_normal - float(line_normal @ face_normal) * face_normal
+    size = float(np.linalg.norm(tilt))
+    if size < 1e-9:
+        return False
+    u = tilt / size
+    return bool(np.median(centres[line] @ u) > float(np.max(centres[face] @ u)) + tol)
 
 
 def nearest_points(
