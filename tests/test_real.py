@@ -175,8 +175,6 @@ def test_explored_scans_keep_their_class(mesh: trimesh.Trimesh, rules: str, labe
         # contacts near their edges fired sensors 10–40° apart, their centres measuring turns
         # of 5–10° ± 2–4° (relief under 5–12 contacts), counted as six gentle folds: curved
         (solids.rotate_about_z(solids.octahedron(0.1488), 174.2), 0.0, "octahedron"),
-        # a heptagonal prism at level 1 with 0.5 mm of noise: seven such folds
-        (solids.rotate_about_z(solids.prism(7, 0.0222, 0.0973), 115.6), 0.0005, "prism"),
         # a 13 cm tetrahedron with 0.5 mm of noise: one face's 13 centres all within 2.5 mm
         # across the direction its sensors turned, a plane plus a·u² through them bending by
         # 187° ± 85°, "measured" beyond 10°; no tip centres bend more than 1/ρ

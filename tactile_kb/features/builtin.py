@@ -715,13 +715,14 @@ def _mad(r: FloatArray) -> float:
 
 def _leans(turn: float, sigma: float, spread_deg: float) -> bool:
     """A face whose turn the centres do not establish beyond ``spread_deg`` still counts as a
-    gentle fold when they cannot measure it at all (``sigma`` infinite), or when they show
-    that it bends (its estimate two standard errors from none) by about ``spread_deg`` (the
-    estimate reaches it). A turn merely within two standard errors of ``spread_deg``, or of
-    none, is no evidence: a flat face with relief (bumps, a scan's roughness under a few
-    contacts, its rounded edges lowering its outer centres) measures a turn of a few degrees
-    with a standard error as large, and six such faces made a polyhedron curved."""
-    return math.isinf(sigma) or abs(turn) >= max(spread_deg, 2.0 * sigma)
+    gentle fold when they cannot measure it at all (``sigma`` infinite), or when their
+    estimate itself reaches ``spread_deg`` (a small cylinder's narrow faces under 0.5 mm of
+    noise: too uncertain to establish their turn, but they lean to it). An estimate below
+    ``spread_deg`` that is merely within two standard errors of it is no evidence: a flat
+    face with relief (bumps, a scan's roughness under a few contacts) measures a turn of a
+    few degrees with a standard error as large, and six such faces made a polyhedron
+    curved."""
+    return math.isinf(sigma) or abs(turn) >= spread_deg
 
 
 def _spread_evidence(model: ObjectModel, spread_deg: float) -> tuple[bool, int]:
