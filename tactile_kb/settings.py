@@ -370,8 +370,8 @@ class FeatureSettings(_Group):
         lt=180,
         description="Degrees: a face whose interior contacts fired sensors further apart, and "
         "whose tip centres turn by more than this (by two standard errors), is curved; where "
-        "the centres cannot tell, the spread counts as one gentle fold towards "
-        "min_smooth_edges.",
+        "the centres cannot measure the turn, or estimate it at least this without "
+        "establishing it, the spread counts as one gentle fold towards min_smooth_edges.",
     )
     bend_sigma_rho: float = Field(
         0.02,

@@ -655,3 +655,89 @@ def test_feet_beyond_a_face_polygon_are_not_inside_it() -> None:
     for ring in (square, square[::-1]):  # either orientation
         d = _polygon_edge_distance(points, ring, np.array([0.0, 0.0, 1.0]))
         assert d == pytest.approx([0.005, -0.005, -0.005, 0.02])
+
+
+def _top_face(rec: ExplorationRecord) -> tuple[ObjectModel, int]:
+    model = build_model(rec)
+    assert model.polyhedron is not None
+    return model, int(np.argmax(model.polyhedron.normals[:, 2]))
+
+
+def _relief_top(
+    rec: ExplorationRecord,
+    height: float,
+    width: float,
+    turn_deg: float,
+    *,
+    rough: float = 0.0,
+    seed: int = 0,
+) -> ExplorationRecord:
+    """``rec`` with the top face's tip centres raised by a Gaussian bump of ``height`` and σ
+    ``width`` at the face's centre (relief: the face stays flat) and by Gaussian roughness of
+    σ ``rough`` (a scan's vertex noise, not declared), and the contacts on the bump's flank
+    reporting directions turned by ``turn_deg`` (a neighbouring sensor)."""
+    rng = np.random.default_rng(seed)
+    model, fi = _top_face(rec)
+    face = model.faces[model.face_of[fi]]
+    c = np.asarray([rec.contacts[i].centre for i in face.contacts])
+    mid = c.mean(axis=0)
+    out = rec
+    for i, centre in zip(face.contacts, c, strict=True):
+        r2 = float(((centre[:2] - mid[:2]) ** 2).sum())
+        bump = height * math.exp(-r2 / (2 * width * width))
+        raised = centre + np.array([0.0, 0.0, bump + (rng.normal(0.0, rough) if rough else 0.0)])
+        d = np.asarray(rec.contacts[i].direction)
+        if 0.5 * width < math.sqrt(r2) < 2.0 * width:  # on the flank: a tilted sensor fires
+            d = _turned_direction(d, turn_deg)
+        out = _with_contact(out, i, d, raised)
+    return out
+
+
+def test_a_bump_on_a_flat_face_is_no_fold_and_no_curvature() -> None:
+    # A 0.3 mm bump, 1 cm wide (σ), in the middle of a 10 cm box's top (a level-1 scan), its
+    # flank firing a sensor 15° off: the centres measure a turn of a few degrees, uncertain,
+    # but below spread_deg. That is relief, not a fold: even one fold making a curved surface
+    # (min_smooth_edges=1), the box stays flat.
+    rec = sample_record(solids.box(0.1, 0.1, 0.05), FINGER, per_face=14, quantise=False, noise=0.0)
+    bumped, fi = _top_face(_relief_top(rec, 0.0003, 0.01, 15.0))
+    turn, sigma = spread_bend(bumped, fi)
+    assert 0.0 < abs(turn) < 10.0
+    assert math.isfinite(sigma)
+    curved = get_feature("surface_curved").fn
+    assert not curved(bumped)
+    assert not curved(bumped, min_smooth_edges=1)
+    # the same face really bent (R = 12 cm: a turn of about 40° across it) stays curved
+    assert curved(build_model(_bent_top(rec, 0.12)))
+
+
+def test_no_turn_steeper_than_the_tip_allows_is_measured() -> None:
+    # Every tip centre of a face crowded within 2 mm across the direction its sensors turn,
+    # with 0.5 mm of noise: a plane plus a·u² fitted to them bends by hundreds of degrees.
+    # Tip centres lie on the surface offset by ρ, curved by at most 1/ρ: the turn measured
+    # is at most 2 mm / 5 mm (23°), too uncertain to make a tetrahedron's face curved.
+    rec = sample_record(
+        solids.box(0.08, 0.08, 0.08), FINGER, per_face=12, quantise=False, noise=0.0
+    )
+    model, fi = _top_face(rec)
+    face = model.faces[model.face_of[fi]]
+    rng = np.random.default_rng(3)
+    mid = np.asarray([rec.contacts[i].centre for i in face.contacts]).mean(axis=0)
+    out = rec.model_copy(update={"noise": 0.0005})
+    for k, i in enumerate(face.contacts):
+        centre = mid + np.array(
+            [
+                rng.uniform(-0.001, 0.001),
+                0.03 * (k / (len(face.contacts) - 1) - 0.5),
+                rng.normal(0.0, 0.0005),
+            ]
+        )
+        d = np.asarray(rec.contacts[i].direction)
+        out = _with_contact(out, i, _turned_direction(d, 15.0) if k % 3 == 0 else d, centre)
+    crowded, fi = _top_face(out)
+    turn, sigma = spread_bend(crowded, fi)
+    contacts = crowded.faces[crowded.face_of[fi]].contacts
+    xs = [crowded.record.contacts[i].centre[0] for i in contacts]
+    bound = math.degrees((max(xs) - min(xs)) / FINGER.radius)
+    assert abs(turn) <= bound + 1e-9
+    assert abs(turn) - 2.0 * sigma < 10.0
+    assert not get_feature("surface_curved").fn(crowded)

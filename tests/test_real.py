@@ -12,6 +12,7 @@ import trimesh
 
 from tactile_kb import solids
 from tactile_kb.errors import UsageError
+from tactile_kb.features.builtin import get_feature
 from tactile_kb.geometry.model import build_model
 from tactile_kb.objects import load_object
 from tactile_kb.perturb import (
@@ -165,3 +166,27 @@ def test_explored_scans_keep_their_class(mesh: trimesh.Trimesh, rules: str, labe
     result = classify(scan, rules=rules, explorer="stepper", seed=0)
     assert result.decision.label == label
     assert result.record.ending == "closed"
+
+
+@pytest.mark.parametrize(
+    ("mesh", "noise", "label"),
+    [
+        # a 15 cm octahedron at level 1 (0.2 mm vertex noise, 0.3 mm bumps): six faces whose
+        # contacts near their edges fired sensors 10–40° apart, their centres measuring turns
+        # of 5–10° ± 2–4° (relief under 5–12 contacts), counted as six gentle folds: curved
+        (solids.rotate_about_z(solids.octahedron(0.1488), 174.2), 0.0, "octahedron"),
+        # a 13 cm tetrahedron with 0.5 mm of noise: one face's 13 centres all within 2.5 mm
+        # across the direction its sensors turned, a plane plus a·u² through them bending by
+        # 187° ± 85°, "measured" beyond 10°; no tip centres bend more than 1/ρ
+        (solids.rotate_about_z(solids.tetrahedron(0.131), 104.7), 0.0005, "tetrahedron"),
+    ],
+)
+def test_scanned_flat_faces_are_not_read_curved(
+    mesh: trimesh.Trimesh, noise: float, label: str
+) -> None:
+    result = classify(
+        perturb(mesh, 1, seed=0), rules="polyhedra", explorer="stepper", noise=noise, seed=0
+    )
+    assert not get_feature("surface_curved").fn(result.model)
+    # the octahedron's envelope has 7 faces, one short (other_polyhedron): another matter
+    assert result.decision.label in (label, "other_polyhedron")

@@ -632,6 +632,9 @@ def spread_bend(
     median absolute deviation) inside the least-squares plane of them all are touches of an
     edge beside the face and left out, unless more than a quarter would be (then the face
     bends away itself).
+    The turn is at most the extent over ρ (tip centres lie on the surface offset by ρ, whose
+    radius of curvature is at least ρ where the surface is convex); a steeper fit, from
+    centres crowded within a few millimetres along ``u``, is cut to that.
     ``sigma`` is the turn's standard error from the larger of the declared noise σ,
     ``features.bend_sigma_rho`` × ρ and the centres' scatter about the bent fit (relief):
     infinite when the centres cannot show a bend at all (on two lines along ``u``, fewer
@@ -695,8 +698,12 @@ def spread_bend(
     # κ = −2a/W², turned over the extent of all the face's contacts (its rounded edges too)
     whole = max(width, float(np.ptp(every @ u_dir)))
     k = whole / width
+    # tip centres lie on the surface offset by ρ, bent by at most 1/ρ where the surface is
+    # convex: over ``whole`` no face turns by more than whole/ρ (a steeper fit is the noise's)
+    bound = whole / rho
+    turn = max(-bound, min(bound, -2.0 * a / width * k))
     return (
-        math.degrees(-2.0 * a / width * k),
+        math.degrees(turn),
         math.degrees(2.0 * sigma / (width * math.sqrt(norm2)) * k),
     )
 
@@ -706,17 +713,30 @@ def _mad(r: FloatArray) -> float:
     return 1.4826 * float(np.median(np.abs(r - np.median(r))))
 
 
+def _leans(turn: float, sigma: float, spread_deg: float) -> bool:
+    """A face whose turn the centres do not establish beyond ``spread_deg`` still counts as a
+    gentle fold when they cannot measure it at all (``sigma`` infinite), or when their
+    estimate itself reaches ``spread_deg`` (a small cylinder's narrow faces under 0.5 mm of
+    noise: too uncertain to establish their turn, but they lean to it). An estimate below
+    ``spread_deg`` that is merely within two standard errors of it is no evidence: a flat
+    face with relief (bumps, a scan's roughness under a few contacts) measures a turn of a
+    few degrees with a standard error as large, and six such faces made a polyhedron
+    curved."""
+    return math.isinf(sigma) or abs(turn) >= spread_deg
+
+
 def _spread_evidence(model: ObjectModel, spread_deg: float) -> tuple[bool, int]:
     """What the faces whose interior contacts fired sensors more than ``spread_deg`` apart
     tell: ``(bent, folds)``.
 
     The face's tip centres measure its turn (:func:`spread_bend`). Beyond ``spread_deg`` by
-    two standard errors: ``bent``. Below it by two: nothing, the sensors' quantisation (a
-    flat face turned between two sensors fires either). In between, or where the centres
-    cannot tell at all (on two lines, too few), the spread is weak evidence: the face counts
-    as one gentle fold, as a smooth edge does (``folds``). So does a face whose contacts fired
-    sensors that far apart only near its edges, when its centres cannot rule the turn out:
-    a small cylinder's faces are too narrow to have an inside, a box's are measured flat."""
+    two standard errors: ``bent``. Otherwise the spread is weak evidence where the centres
+    cannot tell at all (on two lines, too few) or where their estimate itself reaches
+    ``spread_deg`` (:func:`_leans`): the face counts as one gentle fold, as a smooth edge does
+    (``folds``); an estimate below it is the sensors' quantisation (a flat face turned between
+    two sensors fires either) or the face's relief. So does a face whose contacts fired
+    sensors that far apart only near its edges: a small cylinder's faces are too narrow to
+    have an inside, a box's are measured flat."""
 
     def compute() -> tuple[bool, int]:
         folds = 0
@@ -724,7 +744,7 @@ def _spread_evidence(model: ObjectModel, spread_deg: float) -> tuple[bool, int]:
             if s.angle <= spread_deg:
                 if s.any_angle > spread_deg:  # near its edges only: a fold at most
                     found = spread_bend(model, fi, anywhere=True)
-                    if found is not None and abs(found[0]) + 2.0 * found[1] >= spread_deg:
+                    if found is not None and _leans(*found, spread_deg):
                         folds += 1
                 continue
             found = spread_bend(model, fi)
@@ -733,7 +753,7 @@ def _spread_evidence(model: ObjectModel, spread_deg: float) -> tuple[bool, int]:
             turn, sigma = found
             if abs(turn) - 2.0 * sigma > spread_deg:
                 return True, folds  # measured: it turns by more than spread_deg
-            if abs(turn) + 2.0 * sigma >= spread_deg:
+            if _leans(turn, sigma, spread_deg):
                 folds += 1  # the centres cannot tell: the sensors' weak evidence
         return False, folds
 
