@@ -56,6 +56,7 @@ from tactile_kb.geometry.planes import (
 from tactile_kb.geometry.polyhedron import (
     Polyhedron,
     collapse_short_edges,
+    face_width,
     polyhedron_from_planes,
 )
 from tactile_kb.geometry.sections import LayerSection, distinct_planes, layer_sections
@@ -374,7 +375,7 @@ def _far_from_edges(
     b = np.asarray([v[j] for _, j in poly.edges], dtype=float).reshape(-1, 3)
     if len(a) == 0:
         return drop
-    widths = np.asarray([_face_width(poly, f) for f in range(len(poly.faces))])
+    widths = np.asarray([face_width(poly, f) for f in range(len(poly.faces))])
     out = []
     for k in drop:
         c = centres[list(faces[k].contacts)]
@@ -394,16 +395,6 @@ def _far_from_edges(
         if float(np.median(far - allowed)) <= 0.0 and float(np.median(beyond)) <= 0.0:
             out.append(k)
     return out
-
-
-def _face_width(poly: Polyhedron, face: int) -> float:
-    """The in-plane width of a polyhedron face: its extent across its longest direction."""
-    v = poly.vertices[list(poly.faces[face])]
-    if len(v) < 3:
-        return 0.0
-    centred = v - v.mean(axis=0)
-    _, _, vt = np.linalg.svd(centred, full_matrices=False)
-    return float(np.ptp(centred @ vt[1]))
 
 
 def _support(

@@ -51,7 +51,7 @@ from numpy.typing import NDArray
 from scipy.cluster.hierarchy import fcluster, linkage
 
 from tactile_kb.errors import GeometryError, UsageError
-from tactile_kb.geometry.polyhedron import Polyhedron, polyhedron_from_planes
+from tactile_kb.geometry.polyhedron import face_width, polyhedron_from_planes
 from tactile_kb.record import Contact, ExplorationRecord
 from tactile_kb.settings import DEFAULTS, current
 from tactile_kb.types import FloatArray, Vec3
@@ -846,7 +846,7 @@ def edge_faces(
         # each face's width: in the polyhedron of the faces that span planes of their own
         # (and the table) when they close, where narrow edge faces do not cut them short;
         # else in the model as it stands
-        widths = {kept[int(j)]: _width(full, fi) for fi, j in enumerate(full.plane_index)}
+        widths = {kept[int(j)]: face_width(full, fi) for fi, j in enumerate(full.plane_index)}
         adjacent: dict[int, set[int]] = {}
         for a, b in full.edge_faces:
             fa, fb = kept[int(full.plane_index[a])], kept[int(full.plane_index[b])]
@@ -859,7 +859,7 @@ def edge_faces(
                     normals[core], offsets[core], bound=bound, interior=inner
                 )
                 widths.update(
-                    {core[int(j)]: _width(solid, fi) for fi, j in enumerate(solid.plane_index)}
+                    {core[int(j)]: face_width(solid, fi) for fi, j in enumerate(solid.plane_index)}
                 )
             except GeometryError:
                 pass
@@ -906,13 +906,3 @@ def edge_faces(
             return sorted(removed)
         kept.remove(best)
         removed.append(best)
-
-
-def _width(poly: Polyhedron, face: int) -> float:
-    """The in-plane width of a polyhedron face: its extent across its longest direction."""
-    v = poly.vertices[list(poly.faces[face])]
-    if len(v) < 3:
-        return 0.0
-    centred = v - v.mean(axis=0)
-    _, _, vt = np.linalg.svd(centred, full_matrices=False)
-    return float(np.ptp(centred @ vt[1]))

@@ -47,6 +47,7 @@ __all__ = [
     "DEFAULT_MERGE_FRACTION",
     "Polyhedron",
     "collapse_short_edges",
+    "face_width",
     "open_directions",
     "polyhedron_from_planes",
     "vertex_covariances",
@@ -546,6 +547,16 @@ def vertex_covariances(
         a = np.linalg.pinv(poly.normals[fs])
         cov[v] = (a * var[None, :]) @ a.T
     return cov
+
+
+def face_width(poly: Polyhedron, face: int) -> float:
+    """The in-plane width of a polyhedron face: its extent across its longest direction."""
+    v = poly.vertices[list(poly.faces[face])]
+    if len(v) < 3:
+        return 0.0
+    centred = v - v.mean(axis=0)
+    _, _, vt = np.linalg.svd(centred, full_matrices=False)
+    return float(np.ptp(centred @ vt[1]))
 
 
 def collapse_short_edges(
