@@ -316,6 +316,11 @@ def _separate_touching(mesh: trimesh.Trimesh) -> trimesh.Trimesh:
     return out
 
 
+MAX_PARTS = 64
+"""At most this many bodies of a mesh (the largest) are tried as parts of one object
+(:func:`_one_object`); smaller ones can only be specks."""
+
+
 def _one_object(mesh: trimesh.Trimesh, label: str, notes: list[str]) -> trimesh.Trimesh:
     """The object of a mesh made of several bodies.
 
@@ -332,13 +337,25 @@ def _one_object(mesh: trimesh.Trimesh, label: str, notes: list[str]) -> trimesh.
     volumes = np.array([float(np.prod(b.extents)) for b in bodies])
     main = int(np.argmax(sizes))
     reach = limits.join_fraction * sizes[main]
+    # only the largest bodies may be parts (each pair's gap is measured once): a mesh of
+    # thousands of loose triangles would otherwise take hours
+    candidates = [int(k) for k in np.argsort(-sizes)[:MAX_PARTS]]
     group = [main]
+    measured: set[tuple[int, int]] = set()
     grown = True
     while grown:
         grown = False
-        for k in np.argsort(-sizes):
-            k = int(k)
-            if k not in group and any(_gap(bodies[k], bodies[g], reach) <= reach for g in group):
+        for k in candidates:
+            if k in group:
+                continue
+            near = False
+            for g in group:
+                if (k, g) not in measured:
+                    measured.add((k, g))
+                    near = _gap(bodies[k], bodies[g], reach) <= reach
+                    if near:
+                        break
+            if near:
                 group.append(k)
                 grown = True
     others = [k for k in range(len(bodies)) if k not in group]

@@ -332,3 +332,23 @@ def test_parts_of_one_object_are_joined_and_far_bodies_refused() -> None:
     block.apply_translation((0.03 + 0.02 + 0.015, 0.0, 0.0))
     with pytest.raises(ObjectError, match="mug: the mesh holds 2 separate objects"):
         load_object(trimesh.util.concatenate([cup, block]), name="mug")
+
+
+def test_thousands_of_loose_triangles_beside_an_object_are_specks() -> None:
+    # a scan's debris: 2000 loose triangles of about a millimetre in and around a box; only the
+    # largest bodies are tried as parts (MAX_PARTS), the rest are specks
+    from tactile_kb.objects import MAX_PARTS
+
+    rng = np.random.default_rng(0)
+    box = trimesh.creation.box((0.06, 0.05, 0.04))
+    loose = [
+        trimesh.Trimesh(rng.uniform(-0.03, 0.03, 3) + rng.normal(size=(3, 3)) * 0.001, [[0, 1, 2]])
+        for _ in range(2000)
+    ]
+    mesh = load_object(trimesh.util.concatenate([box, *loose]), name="debris")
+    notes = mesh.metadata[NOTES_KEY]
+    dropped = int(notes[0].split()[0])
+    parts = int(notes[1].split()[0]) if "parts under" in notes[1] else 1
+    assert dropped + parts == 2001
+    assert parts <= MAX_PARTS
+    assert mesh.extents == pytest.approx((0.06, 0.05, 0.04), abs=0.012)  # kept parts stick out
