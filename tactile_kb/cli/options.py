@@ -258,13 +258,13 @@ def notices(record: Any) -> list[str]:
     probe notes (one per probe, dozens on a curved object) cut to :data:`PROBE_NOTES_SHOWN`
     and a count; the record keeps them all."""
     out: list[str] = []
-    hidden = 0
+    shown = hidden = 0
     for note in record.notes:
         if note.startswith(("a probe ", "the way to a probe ")):
-            shown = sum(n.startswith(("a probe ", "the way to a probe ")) for n in out)
             if shown >= PROBE_NOTES_SHOWN:
                 hidden += 1
                 continue
+            shown += 1
         out.append(note)
     if hidden:
         out.append(
