@@ -38,6 +38,7 @@ __all__ = [
     "OBJECT_SUFFIXES",
     "SPECK_FRACTION",
     "THIN_FACTOR",
+    "UNITS",
     "WORKSPACE_HALF_WIDTH",
     "ObjectLike",
     "check_thickness",
@@ -196,6 +197,9 @@ def load_object(obj: ObjectLike, *, name: str | None = None) -> trimesh.Trimesh:
         finite = bool(np.isfinite(np.asarray(mesh.vertices, dtype=float)).all())
     if not finite:
         raise ObjectError(f"{label}: the mesh has non-finite (NaN or infinite) vertex coordinates")
+    units = current().objects.units
+    if units != "m":
+        mesh.apply_scale(UNITS[units])  # type: ignore[no-untyped-call]
     mesh.process()
     unique = mesh.unique_faces()
     if not bool(unique.all()):  # the same triangle twice (an export glitch, a part pasted twice)
@@ -224,7 +228,8 @@ def load_object(obj: ObjectLike, *, name: str | None = None) -> trimesh.Trimesh:
     if float(extent.max()) > current().objects.max_size:
         raise ObjectError(
             f"{label}: larger than the workspace: {float(extent.max()):.3g} m across "
-            f"(at most {current().objects.max_size:g} m; is the mesh in millimetres?)"
+            f"(at most {current().objects.max_size:g} m; is the mesh in millimetres? then read "
+            'it with the units mm: --units mm, or objects.units = "mm")'
         )
     lo, hi = mesh.bounds
     if (
@@ -237,11 +242,48 @@ def load_object(obj: ObjectLike, *, name: str | None = None) -> trimesh.Trimesh:
         )
     if mesh.is_watertight and signed < 0:  # (solid is mesh)
         mesh.invert()
+    if current().objects.rest == "stable":
+        mesh = _rest_stable(mesh, solid, notes)
+        lo, _ = mesh.bounds
     mesh.apply_translation((0.0, 0.0, -float(lo[2])))
     mesh.metadata["moved_z"] = -float(lo[2])  # reported in the exploration's notes
     mesh.metadata["name"] = label
     mesh.metadata[NOTES_KEY] = notes
     return mesh
+
+
+UNITS: dict[str, float] = {"m": 1.0, "cm": 0.01, "mm": 0.001, "in": 0.0254}
+"""Metres per unit of the length units a mesh file may be in (setting ``objects.units``)."""
+
+
+def _rest_stable(
+    mesh: trimesh.Trimesh, solid: trimesh.Trimesh, notes: list[str]
+) -> trimesh.Trimesh:
+    """``mesh`` turned to the most probable pose it comes to rest in when dropped on the table
+    (``trimesh.poses.compute_stable_poses`` of ``solid``, the closed mesh or its convex hull,
+    with its centre of mass), its centre kept where it was in x and y."""
+    if solid.is_watertight and abs(_signed_volume(solid)) > 0:
+        centre = np.asarray(solid.center_mass, dtype=float)
+    else:
+        centre = np.asarray(solid.bounds, dtype=float).mean(axis=0)
+    transforms, probs = trimesh.poses.compute_stable_poses(solid.convex_hull, center_mass=centre)
+    if len(transforms) == 0:
+        return mesh
+    best = int(np.argmax(probs))
+    turned = np.asarray(transforms[best], dtype=float)
+    was = 0.5 * (mesh.bounds[0] + mesh.bounds[1])
+    out = mesh.copy()
+    out.apply_transform(turned)
+    now = 0.5 * (out.bounds[0] + out.bounds[1])
+    out.apply_translation((float(was[0] - now[0]), float(was[1] - now[1]), 0.0))
+    if not np.allclose(turned[:3, :3], np.eye(3), atol=1e-9):
+        down = turned[:3, :3].T @ np.array([0.0, 0.0, -1.0])  # the resting side, as given
+        notes.append(
+            "turned to rest in its most probable stable pose "
+            f"(p = {float(probs[best]):.2f}; it lies on the side facing "
+            f"({down[0]:+.2f}, {down[1]:+.2f}, {down[2]:+.2f}) of the mesh as given)"
+        )
+    return out
 
 
 WELD_FRACTION = DEFAULTS.objects.weld_fraction

@@ -44,7 +44,7 @@ from collections.abc import Iterator, Mapping, Sequence
 from contextlib import AbstractContextManager, contextmanager
 from contextvars import ContextVar
 from pathlib import Path
-from typing import Any
+from typing import Any, Literal
 
 from pydantic import BaseModel, ConfigDict, Field, ValidationError
 
@@ -502,6 +502,17 @@ class ObjectSettings(_Group):
         gt=0,
         description="Metres: every point of the object must lie within this distance of the z "
         "axis in x and y.",
+    )
+    units: Literal["m", "cm", "mm", "in"] = Field(
+        "m",
+        description="The length unit of mesh files (m, cm, mm or in): a mesh is scaled to "
+        "metres as it is read (CAD exports are often in millimetres).",
+    )
+    rest: Literal["as-given", "stable"] = Field(
+        "as-given",
+        description="How an object is put on the table: as-given keeps the mesh's "
+        "orientation (its lowest point on the table); stable turns it to the most probable "
+        "pose it comes to rest in when dropped (trimesh's stable poses).",
     )
 
 

@@ -281,3 +281,37 @@ def test_probe_notes_are_cut_to_a_few_and_counted() -> None:
     assert len(shown) == 6
     few = ["a probe (x) found nothing (none)", "other"]
     assert notices(SimpleNamespace(notes=few)) == few
+
+
+def test_units_and_rest_options(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    import trimesh
+
+    mm = box(0.08, 0.06, 0.04)
+    mm.apply_scale(1000.0)
+    path = tmp_path / "box_mm.stl"
+    mm.export(path)
+    assert main(["classify", str(path)]) == 1
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1
+    assert "80 m across" in err
+    assert "--units mm" in err
+    assert main(["classify", str(path), "--units", "mm"]) == 0
+    assert capsys.readouterr().out.strip() == f"{path}- OBJECT IS A RECTANGULAR PARALLELEPIPED"
+    # an explicit --set of the same setting wins over the shortcut
+    assert main(["classify", str(path), "--units", "mm", "--set", "objects.units=m"]) == 1
+    capsys.readouterr()
+    # a slab standing on a corner: as given it is explored as it stands; --rest stable lays it
+    # down on a broad face first, and says so
+    slab = box(0.08, 0.06, 0.02)
+    slab.apply_transform(trimesh.transformations.rotation_matrix(0.7, [1.0, 0.3, 0.0]))
+    tilted = tmp_path / "slab.stl"
+    slab.export(tilted)
+    assert (
+        main(["explore", str(tilted), "--rest", "stable", "--out", str(tmp_path / "r.json")]) == 0
+    )
+    err = capsys.readouterr().err
+    assert "turned to rest in its most probable stable pose" in err
+    record = json.loads((tmp_path / "r.json").read_text())
+    assert max(c["point"][2] for c in record["contacts"]) == pytest.approx(0.02, abs=0.002)
+    assert main(["classify", str(tilted), "--rest", "upright"]) == 2
+    assert "--rest: invalid choice: 'upright'" in capsys.readouterr().err

@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 import trimesh
 
+from tactile_kb import settings
 from tactile_kb.completion import model_completer
 from tactile_kb.errors import ObjectError
 from tactile_kb.objects import MAX_SIZE, NOTES_KEY, load_object, min_width, object_name
@@ -352,3 +353,66 @@ def test_thousands_of_loose_triangles_beside_an_object_are_specks() -> None:
     assert dropped + parts == 2001
     assert parts <= MAX_PARTS
     assert mesh.extents == pytest.approx((0.06, 0.05, 0.04), abs=0.012)  # kept parts stick out
+
+
+# --- units and resting poses (settings objects.units and objects.rest) ------------------------
+
+
+@pytest.mark.parametrize(
+    ("units", "per_metre"), [("mm", 1000.0), ("cm", 100.0), ("in", 1 / 0.0254)]
+)
+def test_a_mesh_in_other_units_is_scaled_to_metres(units: str, per_metre: float) -> None:
+    mesh = trimesh.creation.box((0.08, 0.06, 0.04))
+    mesh.apply_scale(per_metre)
+    with settings.override(objects={"units": units}):
+        obj = load_object(mesh)
+    assert np.allclose(sorted(obj.extents), [0.04, 0.06, 0.08])
+    assert obj.bounds[0][2] == pytest.approx(0.0, abs=1e-12)
+
+
+def test_a_millimetre_mesh_read_as_metres_names_the_units_setting() -> None:
+    mesh = trimesh.creation.box((80.0, 60.0, 40.0))
+    with pytest.raises(ObjectError, match=r"larger than the workspace.*--units mm"):
+        load_object(mesh)
+
+
+def _tilted(mesh: trimesh.Trimesh, seed: int) -> trimesh.Trimesh:
+    out = mesh.copy()
+    out.apply_transform(
+        trimesh.transformations.random_rotation_matrix(np.random.default_rng(seed).random(3))
+    )
+    return out
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_rest_stable_lays_a_tilted_slab_on_a_broad_face(seed: int) -> None:
+    # a 8 × 6 × 2 cm slab comes to rest on one of its two broad faces: 2 cm high
+    slab = trimesh.creation.box((0.08, 0.06, 0.02))
+    tilted = _tilted(slab, seed)
+    as_given = load_object(tilted)
+    assert as_given.extents[2] > 0.03  # standing on an edge or a corner as given
+    with settings.override(objects={"rest": "stable"}):
+        rested = load_object(tilted)
+    assert rested.extents[2] == pytest.approx(0.02, abs=1e-9)
+    assert np.isclose(rested.vertices[:, 2], 0.0, atol=1e-9).sum() == 4  # a face on the table
+    assert rested.volume == pytest.approx(slab.volume)
+    assert any("most probable stable pose" in n for n in rested.metadata[NOTES_KEY])
+
+
+def test_rest_stable_puts_a_tilted_tetrahedron_on_a_face() -> None:
+    tetra = trimesh.Trimesh(
+        [[0, 0, 0], [0.06, 0, 0], [0.01, 0.05, 0], [0.02, 0.02, 0.04]],
+        [[0, 2, 1], [0, 1, 3], [1, 2, 3], [0, 3, 2]],
+    )
+    tilted = _tilted(tetra, 5)
+    with settings.override(objects={"rest": "stable"}):
+        rested = load_object(tilted)
+    assert np.isclose(rested.vertices[:, 2], 0.0, atol=1e-9).sum() == 3
+
+
+def test_rest_stable_keeps_an_object_already_at_rest() -> None:
+    slab = trimesh.creation.box((0.08, 0.06, 0.02))
+    with settings.override(objects={"rest": "stable"}):
+        rested = load_object(slab)
+    assert rested.extents[2] == pytest.approx(0.02)
+    assert np.allclose(rested.bounds.mean(axis=0)[:2], slab.bounds.mean(axis=0)[:2])

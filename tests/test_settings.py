@@ -23,7 +23,7 @@ from tactile_kb.touch.synthetic import sample_record
 
 # The values the modules documented before the settings object existed (written out here, not
 # read from the library, so that a changed default fails this test).
-DOCUMENTED: dict[str, dict[str, float]] = {
+DOCUMENTED: dict[str, dict[str, float | str]] = {
     "world": {"contact_tol": 1e-7, "block_tol": 1e-9, "same_contact_deg": 1.0},
     "finger": {"align_4_deg": 10.0, "max_usable_error_deg": 25.0},
     "servo": {"curved_run": 3, "ride_step": 0.8, "ride_deg": 20.0},
@@ -85,6 +85,8 @@ DOCUMENTED: dict[str, dict[str, float]] = {
         "weld_fraction": 1e-5,
         "speck_volume_fraction": 0.01,
         "workspace_half_width": 0.5,
+        "units": "m",
+        "rest": "as-given",
     },
 }
 
@@ -126,6 +128,7 @@ def test_the_old_constants_are_the_defaults() -> None:
         ({"features": {"tolerance_deg": 0.0}}, "features.tolerance_deg"),
         ({"geometry": {"merge_fraction": 1.5}}, "geometry.merge_fraction: Input should be less"),
         ({"objects": {"max_size": "big"}}, "objects.max_size: Input should be a valid number"),
+        ({"objects": {"units": "feet"}}, "objects.units: Input should be 'm', 'cm', 'mm' or 'in'"),
         ({"features": {"min_sagitta_contacts": 3}}, "features.min_sagitta_contacts"),
         ({"features": {"tolerance": 1.0}}, "features.tolerance: Extra inputs are not permitted"),
         ({"geometri": {"cut_deg": 1.0}}, "no group 'geometri'"),

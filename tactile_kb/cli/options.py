@@ -157,6 +157,17 @@ def add_exploration_options(p: argparse.ArgumentParser, *, with_seed: bool = Tru
             "--seed", type=seed, default=0, help="seed for noise and drop-outs (default: 0)"
         )
     p.add_argument(
+        "--units",
+        choices=("m", "cm", "mm", "in"),
+        help="the length unit of the mesh files (default: m; the setting objects.units)",
+    )
+    p.add_argument(
+        "--rest",
+        choices=("as-given", "stable"),
+        help="as-given: the mesh's own orientation, its lowest point on the table (default); "
+        "stable: turned to the pose it most probably rests in when dropped (objects.rest)",
+    )
+    p.add_argument(
         "--settings",
         metavar="FILE.toml",
         help="tolerances and budgets from a TOML file, one [group] table each (docs/settings.md)",
@@ -171,11 +182,18 @@ def add_exploration_options(p: argparse.ArgumentParser, *, with_seed: bool = Tru
 
 
 def chosen_settings(args: argparse.Namespace) -> Any:
-    """The settings a command runs with: the defaults, then ``--settings FILE``, then each
-    ``--set``; ``None`` when the command has neither option or neither was given."""
+    """The settings a command runs with: the defaults, then ``--settings FILE``, then
+    ``--units`` and ``--rest``, then each ``--set``; ``None`` when none of them was given."""
     from tactile_kb import settings
 
-    path, sets = getattr(args, "settings", None), getattr(args, "set", None) or []
+    path, sets = getattr(args, "settings", None), list(getattr(args, "set", None) or [])
+    # the shortcuts first, so that an explicit --set of the same field wins
+    shortcuts = [
+        f"objects.{field}={value}"
+        for field in ("units", "rest")
+        if (value := getattr(args, field, None)) is not None
+    ]
+    sets = shortcuts + sets
     if path is None and not sets:
         return None
     chosen = settings.load(path) if path is not None else settings.DEFAULTS
