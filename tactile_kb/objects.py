@@ -1,4 +1,4 @@
-"""Objects to explore: meshes from STL, OBJ or PLY (or a trimesh.Trimesh), checked and put on the table.
+"""Objects to explore: meshes from STL, OBJ, PLY, OFF or glTF (or a trimesh.Trimesh), checked and put on the table.
 
 :func:`load_object` reads a mesh in metres with trimesh, validates it (readable, not empty,
 a solid, one object, fits the workspace), cleans it (floating specks dropped, holes filled)
@@ -40,6 +40,7 @@ __all__ = [
     "THIN_FACTOR",
     "UNITS",
     "WORKSPACE_HALF_WIDTH",
+    "Y_UP_SUFFIXES",
     "ObjectLike",
     "check_thickness",
     "load_object",
@@ -50,7 +51,10 @@ __all__ = [
 ObjectLike = trimesh.Trimesh | str | Path
 """What the explorers accept: a mesh, or a path to an STL/OBJ/PLY file."""
 
-OBJECT_SUFFIXES = (".stl", ".obj", ".ply")
+OBJECT_SUFFIXES = (".stl", ".obj", ".ply", ".off", ".glb", ".gltf")
+
+Y_UP_SUFFIXES = (".glb", ".gltf")
+"""Formats whose up axis is +y (glTF's convention): read with +y turned to +z, the table's up."""
 
 MAX_SIZE = DEFAULTS.objects.max_size
 """Metres: the largest extent an object may have (the motors' range, 2–30 cm objects)."""
@@ -101,6 +105,10 @@ def _read(path: Path) -> trimesh.Trimesh:
         raise ObjectError(unreadable) from None
     if not isinstance(loaded, trimesh.Trimesh) or len(loaded.faces) == 0:
         raise ObjectError(f"{unreadable}: no triangles found")
+    if suffix in Y_UP_SUFFIXES:  # a quarter turn about x: (x, y, z) -> (x, -z, y)
+        loaded.vertices = np.asarray(loaded.vertices, dtype=float) @ np.array(
+            [[1.0, 0.0, 0.0], [0.0, 0.0, 1.0], [0.0, -1.0, 0.0]]
+        )
     return loaded
 
 
@@ -166,7 +174,8 @@ def load_object(obj: ObjectLike, *, name: str | None = None) -> trimesh.Trimesh:
     Parameters
     ----------
     obj
-        A ``trimesh.Trimesh`` or a path to an STL, OBJ or PLY file, in metres.
+        A ``trimesh.Trimesh`` or a path to an STL, OBJ, PLY, OFF or glTF (``.glb``, ``.gltf``:
+        +y up, turned to +z) file, in the units of ``objects.units`` (metres by default).
     name
         The name used in error messages (default: the path, or the mesh's name).
 

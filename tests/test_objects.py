@@ -416,3 +416,21 @@ def test_rest_stable_keeps_an_object_already_at_rest() -> None:
         rested = load_object(slab)
     assert rested.extents[2] == pytest.approx(0.02)
     assert np.allclose(rested.bounds.mean(axis=0)[:2], slab.bounds.mean(axis=0)[:2])
+
+
+@pytest.mark.parametrize("suffix", [".off", ".glb", ".gltf"])
+def test_off_and_gltf_files_load_gltf_with_y_up(tmp_path: Path, suffix: str) -> None:
+    # 2 cm in x, 10 cm in y, 4 cm in z, as stored in the file
+    mesh = trimesh.creation.box((0.02, 0.10, 0.04))
+    path = tmp_path / f"part{suffix}"
+    if suffix == ".gltf":  # a JSON file and its buffers (trimesh's export leaves a file open)
+        for name, data in trimesh.exchange.gltf.export_gltf(mesh).items():
+            (tmp_path / ("part.gltf" if name == "model.gltf" else name)).write_bytes(data)
+    else:
+        mesh.export(path)
+    obj = load_object(path)
+    assert obj.is_watertight
+    assert obj.volume == pytest.approx(0.02 * 0.10 * 0.04)
+    # glTF's up is +y: the 10 cm side stands up; OFF keeps z up
+    want = [0.02, 0.04, 0.10] if suffix in (".glb", ".gltf") else [0.02, 0.10, 0.04]
+    assert np.allclose(obj.extents, want)

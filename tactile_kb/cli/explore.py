@@ -47,7 +47,12 @@ def register(sub: argparse._SubParsersAction[Any]) -> None:
     p.set_defaults(func=_classify)
 
     p = sub.add_parser("explore", help="explore objects and save their records")
-    p.add_argument("paths", nargs="+", metavar="PATH", help="mesh files (STL, OBJ, PLY), metres")
+    p.add_argument(
+        "paths",
+        nargs="+",
+        metavar="PATH",
+        help="mesh files (STL, OBJ, PLY, OFF, glTF), metres unless --units",
+    )
     p.add_argument(
         "--out",
         required=True,

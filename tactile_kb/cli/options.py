@@ -117,7 +117,12 @@ def positive(text: str) -> float:
 
 def add_object_inputs(p: argparse.ArgumentParser, what: str) -> None:
     """``PATH...`` mesh files and ``--record RECORD.json`` (repeatable) to ``what``."""
-    p.add_argument("paths", nargs="*", metavar="PATH", help="mesh files (STL, OBJ, PLY), metres")
+    p.add_argument(
+        "paths",
+        nargs="*",
+        metavar="PATH",
+        help="mesh files (STL, OBJ, PLY, OFF, glTF), metres unless --units",
+    )
     p.add_argument(
         "--record",
         action="append",
