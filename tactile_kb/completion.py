@@ -49,11 +49,14 @@ from tactile_kb.touch.servo import Ending, Probe
 from tactile_kb.types import FloatArray
 
 __all__ = [
+    "CORNER_PROBES",
     "DEFAULT_COMPLETION",
     "CompletionParams",
     "ModelCompleter",
     "completing",
     "completion_probes",
+    "corner_juts",
+    "corner_probes",
     "model_completer",
 ]
 
@@ -66,12 +69,22 @@ normal no better than its neighbours', and a touch off the line then fits nothin
 
 _PATH = "the path passes inside the model"
 _HINT = "the hint reaches beyond the model"
-_TESTS = (_PATH, _HINT)  # probes that test the model, never holding the completion open
+_CORNER = "a corner juts out"
+_TESTS = (_PATH, _HINT, _CORNER)  # probes that test the model, never holding the completion open
 
 PATH_PROBES = 4
 """At most this many probes per exploration where a contour's path passed inside the model, or
 the hint box reaches past it (:func:`completion_probes`): tests of a corner or a part the
 envelope may have wrong, each tried once, never items that hold the completion open."""
+
+CORNER_PROBES = 3
+"""At most this many corner checks per exploration (:func:`corner_probes`): each tests one
+modelled corner that juts out from the touched points far more than the model's other corners
+do, once; like the path's, they never hold the completion open."""
+
+CORNER_OUTLIER = 1.5
+"""A corner is checked when it juts out from the touched points more than this many times the
+median of the model's corners (:func:`corner_probes`)."""
 
 TOP_NZ = DEFAULTS.explore.top_nz
 """A face whose normal's z component is at least this is a top, probed from above when its tip
@@ -238,6 +251,7 @@ def completion_probes(model: ObjectModel, *, height_gap: float | None = None) ->
     probes += _low_side_probes(model, centres, rho)
     probes += _beyond_model_probes(model, rho)
     probes += _free_path_probes(model, rho)
+    probes += corner_probes(model)
     return probes
 
 
@@ -338,6 +352,126 @@ def _free_path_probes(model: ObjectModel, rho: float, *, most: int = 4) -> list[
         )
         if len(out) >= most:
             break
+    return out
+
+
+def corner_juts(model: ObjectModel) -> FloatArray:
+    """How far (m) each vertex of the model's polyhedron lies outside the convex hull of the
+    touched points (the contacts' surface points ``r1``); zeros without a polyhedron.
+
+    A corner of the envelope is where the planes of touched faces meet: no touch found it.
+    Where it lies far outside what was touched, a face nobody touched may cut it off.
+    """
+    poly = model.polyhedron
+    if poly is None:
+        return np.zeros(0)
+    pts = np.asarray([c.point for c in model.record.contacts], dtype=float).reshape(-1, 3)
+    verts = np.asarray(poly.vertices, dtype=float)
+    if len(pts) == 0:
+        return np.zeros(len(verts))
+    nearest = np.linalg.norm(verts[:, None, :] - pts[None, :, :], axis=2).min(axis=1)
+    if len(pts) < 4:
+        return np.asarray(nearest, dtype=float)
+    from scipy.spatial import ConvexHull, QhullError
+    from trimesh.triangles import closest_point
+
+    try:
+        hull = ConvexHull(pts)
+    except (QhullError, ValueError):  # the touched points lie in a plane: their distances
+        return np.asarray(nearest, dtype=float)
+    tris = pts[hull.simplices]
+    out = np.zeros(len(verts))
+    for i, v in enumerate(verts):
+        if float((hull.equations[:, :3] @ v + hull.equations[:, 3]).max()) <= 0.0:
+            continue  # inside what was touched
+        foot = closest_point(tris, np.broadcast_to(v, (len(tris), 3)))
+        out[i] = float(np.linalg.norm(foot - v, axis=1).min())
+    return out
+
+
+def corner_probes(model: ObjectModel) -> list[Probe]:
+    """Probes that test the model's corners that jut out from the touched points, furthest
+    first.
+
+    A closed envelope can still be wrong: a face no touch found is cut off the model, and the
+    planes of its neighbours meet in a corner where the object is not (a lying pyramid's
+    undercut side, a face above the top layer). Such a corner lies further outside the convex
+    hull of the touched points (:func:`corner_juts`) than the model's other corners, which the
+    contour layers' spacing keeps alike. A corner is tested when it juts out more than
+
+    * :data:`CORNER_OUTLIER` × the median of the model's corners,
+    * 2 ρ + 3 σ (a corner within the tip's size of the touches is as good as touched; σ the
+      declared noise), and 5 % of the model's diameter (a smaller cut changes no feature);
+
+    and a face the model left out as concave does not cut it off (the hollow of an L-block is
+    known already). The probe approaches along the corner's outward direction (the mean of its
+    faces' normals), aimed at it from outside, and may go as far beyond it as it juts out plus
+    2 ρ: a touch at the corner confirms it (and puts it in the touched hull); a touch deeper
+    in is a face the model lacks, which the next model has. Corners on the table, or whose
+    direction points down, are approached level, 1.5 ρ above the table (or at their own
+    height), with the head indexed towards the object, so that a face turning under meets a
+    sensor.
+    """
+    poly = model.polyhedron
+    record = model.record
+    if poly is None or not record.contacts:
+        return []
+    rho, sigma = record.tip_radius, record.noise
+    juts = corner_juts(model)
+    if len(juts) < 4:
+        return []
+    size = float(np.linalg.norm(np.ptp(poly.vertices, axis=0)))
+    limit = max(2.0 * rho + 3.0 * sigma, 0.05 * size, CORNER_OUTLIER * float(np.median(juts)))
+    tol = 0.25 * rho + 3.0 * sigma
+    concave = [
+        f
+        for f, keep in zip(model.faces, model.supporting, strict=False)
+        if not keep and f.source == "contacts"
+    ]
+    table = {
+        k
+        for k in range(len(poly.faces))
+        if k < len(model.face_of)
+        and model.face_of[k] >= 0
+        and model.faces[model.face_of[k]].source == "table"
+    }
+    out: list[Probe] = []
+    for i in np.argsort(-juts):
+        jut = float(juts[i])
+        if jut <= limit:
+            break
+        v = np.asarray(poly.vertices[i], dtype=float)
+        if any(float(f.normal_array @ v) - f.offset > tol for f in concave):
+            continue
+        around = [k for k, verts in enumerate(poly.faces) if int(i) in verts]
+        normals = poly.normals[[k for k in around if k not in table]]
+        if len(normals) == 0:
+            continue
+        n = normals.sum(axis=0)
+        if float(np.linalg.norm(n)) < 1e-9:
+            continue
+        n = n / float(np.linalg.norm(n))
+        facing: tuple[float, float, float] | None = None
+        if len(around) > len(normals) or n[2] < -0.2:
+            flat = np.array([n[0], n[1], 0.0])
+            if float(np.linalg.norm(flat)) < 0.3:
+                continue  # straight under the object
+            d = flat / float(np.linalg.norm(flat))
+            target = v + rho * d
+            target[2] = max(float(v[2]), 1.5 * rho)
+            facing = _v(-d)
+        else:
+            d = n
+            target = v + rho * d
+        out.append(
+            Probe(
+                _v(target),
+                _v(d),
+                jut + 2.0 * rho,
+                f"{_CORNER} at {_name(v * 1000.0)} mm",
+                facing=facing,
+            )
+        )
     return out
 
 
@@ -728,6 +862,7 @@ class ModelCompleter:
         self._start: tuple[int, float] | None = None
         self._tried: Counter[str] = Counter()
         self._path_probes = 0
+        self._corner_probes = 0
         self.probes = 0
 
     def _budget(self, record: ExplorationRecord, model: ObjectModel) -> tuple[int, float]:
@@ -765,8 +900,7 @@ class ModelCompleter:
         wanted = [
             p
             for p in completion_probes(model, height_gap=self.params.height_gap)
-            if not p.reason.startswith(_TESTS)
-            or (self._path_probes < PATH_PROBES and not self._tried[p.reason])
+            if self._allowed(p)
         ]
         open_items = [p.reason for p in wanted if not p.reason.startswith(_TESTS)]
         if model.polyhedron is None and not wanted:
@@ -815,8 +949,23 @@ class ModelCompleter:
         ):
             probe = _nearer_the_touches(record, probe)
         self._tried[probe.reason] += 1
-        self._path_probes += probe.reason.startswith(_TESTS)
+        if probe.reason.startswith(_CORNER):
+            self._corner_probes += 1
+        elif probe.reason.startswith(_TESTS):
+            self._path_probes += 1
         return probe
+
+    def _allowed(self, p: Probe) -> bool:
+        """Whether ``p`` may be asked for: what holds the completion open always; a test of
+        the model once, while its kind's allowance (:data:`PATH_PROBES`,
+        :data:`CORNER_PROBES`) lasts."""
+        if not p.reason.startswith(_TESTS):
+            return True
+        if self._tried[p.reason]:
+            return False
+        if p.reason.startswith(_CORNER):
+            return self._corner_probes < CORNER_PROBES
+        return self._path_probes < PATH_PROBES
 
 
 def model_completer(params: CompletionParams | None = None) -> Callable[[], ModelCompleter]:
