@@ -37,6 +37,7 @@ from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
+from scipy.spatial import ConvexHull, QhullError
 
 from tactile_kb.errors import TactileKBError, UsageError
 from tactile_kb.geometry.model import ObjectModel, build_model
@@ -369,24 +370,56 @@ def corner_juts(model: ObjectModel) -> FloatArray:
     verts = np.asarray(poly.vertices, dtype=float)
     if len(pts) == 0:
         return np.zeros(len(verts))
-    nearest = np.linalg.norm(verts[:, None, :] - pts[None, :, :], axis=2).min(axis=1)
-    if len(pts) < 4:
-        return np.asarray(nearest, dtype=float)
-    from scipy.spatial import ConvexHull, QhullError
+    hull = _touched_hull(model)
+    if hull is None:  # the touched points lie in a plane: their distances
+        return np.asarray(
+            np.linalg.norm(verts[:, None, :] - pts[None, :, :], axis=2).min(axis=1), dtype=float
+        )
     from trimesh.triangles import closest_point
 
-    try:
-        hull = ConvexHull(pts)
-    except (QhullError, ValueError):  # the touched points lie in a plane: their distances
-        return np.asarray(nearest, dtype=float)
     tris = pts[hull.simplices]
     out = np.zeros(len(verts))
-    for i, v in enumerate(verts):
-        if float((hull.equations[:, :3] @ v + hull.equations[:, 3]).max()) <= 0.0:
-            continue  # inside what was touched
-        foot = closest_point(tris, np.broadcast_to(v, (len(tris), 3)))
-        out[i] = float(np.linalg.norm(foot - v, axis=1).min())
+    outside = np.flatnonzero(
+        (verts @ hull.equations[:, :3].T + hull.equations[:, 3]).max(axis=1) > 0
+    )
+    if len(outside):  # the nearest point of every hull triangle to every corner outside it
+        q = np.repeat(verts[outside], len(tris), axis=0)
+        foot = closest_point(np.tile(tris, (len(outside), 1, 1)), q)
+        dist = np.linalg.norm(foot - q, axis=1).reshape(len(outside), len(tris))
+        out[outside] = dist.min(axis=1)
     return out
+
+
+def _touched_hull(model: ObjectModel) -> ConvexHull | None:
+    """The convex hull of the touched points (the contacts' ``r1``), or None when they span
+    no volume."""
+    pts = np.asarray([c.point for c in model.record.contacts], dtype=float).reshape(-1, 3)
+    if len(pts) < 4:
+        return None
+    try:
+        return ConvexHull(pts)
+    except (QhullError, ValueError):
+        return None
+
+
+def _ray_into(hull: ConvexHull, start: FloatArray, direction: FloatArray) -> float | None:
+    """How far from ``start`` along ``direction`` the line enters the convex ``hull`` (0 when
+    it starts inside), or None when it misses it."""
+    a, b = hull.equations[:, :3], hull.equations[:, 3]
+    side = a @ start + b  # ≤ 0 inside each plane
+    rate = a @ direction
+    enter, leave = 0.0, math.inf
+    for s_k, r_k in zip(side, rate, strict=True):
+        if abs(r_k) < 1e-12:
+            if s_k > 0:
+                return None
+            continue
+        t = -s_k / r_k
+        if r_k < 0:
+            enter = max(enter, t)
+        else:
+            leave = min(leave, t)
+    return enter if enter <= leave else None
 
 
 def corner_probes(model: ObjectModel) -> list[Probe]:
@@ -418,15 +451,19 @@ def corner_probes(model: ObjectModel) -> list[Probe]:
         return []
     rho, sigma = record.tip_radius, record.noise
     juts = corner_juts(model)
-    if len(juts) < 4:
+    hull = _touched_hull(model)
+    if len(juts) < 4 or hull is None:
         return []
+    middle = np.asarray(hull.points, dtype=float).mean(axis=0)
     size = float(np.linalg.norm(np.ptp(poly.vertices, axis=0)))
     limit = max(2.0 * rho + 3.0 * sigma, 0.05 * size, CORNER_OUTLIER * float(np.median(juts)))
     tol = 0.25 * rho + 3.0 * sigma
+    # concave faces whose plane the tip centres fitted (an unrefined one has the sensor's
+    # quantised normal, which may be what made it look concave)
     concave = [
         f
         for f, keep in zip(model.faces, model.supporting, strict=False)
-        if not keep and f.source == "contacts"
+        if not keep and f.source == "contacts" and f.refined
     ]
     table = {
         k
@@ -451,26 +488,18 @@ def corner_probes(model: ObjectModel) -> list[Probe]:
         if float(np.linalg.norm(n)) < 1e-9:
             continue
         n = n / float(np.linalg.norm(n))
-        facing: tuple[float, float, float] | None = None
         if len(around) > len(normals) or n[2] < -0.2:
-            flat = np.array([n[0], n[1], 0.0])
-            if float(np.linalg.norm(flat)) < 0.3:
-                continue  # straight under the object
-            d = flat / float(np.linalg.norm(flat))
-            target = v + rho * d
-            target[2] = max(float(v[2]), 1.5 * rho)
-            facing = _v(-d)
-        else:
-            d = n
-            target = v + rho * d
+            continue  # on the table or under the object: the bottom probes' business
+        depth = _ray_into(hull, v, -n)
+        if depth is None:  # the line misses what was touched: aim at its middle instead
+            n = v - middle
+            n = n / float(np.linalg.norm(n))
+            depth = _ray_into(hull, v, -n)
+            if depth is None or n[2] < -0.2:
+                continue
+        target = v + rho * n
         out.append(
-            Probe(
-                _v(target),
-                _v(d),
-                jut + 2.0 * rho,
-                f"{_CORNER} at {_name(v * 1000.0)} mm",
-                facing=facing,
-            )
+            Probe(_v(target), _v(n), depth + 2.0 * rho, f"{_CORNER} at {_name(v * 1000.0)} mm")
         )
     return out
 
