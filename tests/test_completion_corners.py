@@ -81,29 +81,30 @@ def test_a_modelled_box_whose_faces_were_all_touched_has_no_corner_to_test() -> 
     assert corner_probes(build_model(rec)) == []
 
 
-def _lying_pyramid() -> trimesh.Trimesh:
-    """A hexagonal pyramid resting on a lateral face (its stable pose with its base facing
-    sideways): the two sides beside the table face turn under the sides above them."""
-    mesh = solids.rotate_about_z(solids.pyramid(6, 0.0315, 0.0405), 357.8)
+def _lying_prism() -> trimesh.Trimesh:
+    """A long pentagonal prism lying on a side: its two upper sides meet in a ridge along its
+    length, and one end of the ridge the contour layers never reach."""
+    mesh = solids.rotate_about_z(solids.prism(5, 0.0486, 0.1792), 201.8)
     posed = [m for m, _ in solids.stable_poses(mesh, min_probability=0.02)]
-    # on a side: one triangle faces the table (the base is a fan of four)
-    lying = [m for m in posed if int((m.face_normals[:, 2] < -1.0 + 1e-6).sum()) == 1]
-    return solids.rotate_about_z(lying[0], 175.0)
+    return solids.rotate_about_z(posed[3], 225.54)
 
 
 @pytest.mark.parametrize("corners", [completion.CORNER_PROBES, 0])
-def test_the_face_under_a_lying_pyramid_is_found_by_a_corner_probe(
+def test_the_face_above_a_lying_prism_is_found_by_a_corner_probe(
     corners: int, monkeypatch: pytest.MonkeyPatch
 ) -> None:
-    """Without corner probes (0: as before them) the model of a lying pyramid keeps a corner
-    27 mm out where a side turns under; with them every modelled corner lies on the object."""
+    """Without corner probes (0: as before them) the model of a lying prism keeps two corners
+    nearly 9 cm above the object, where a side touched along one line (its quantised normal
+    made it look concave) was left out; with them a probe aimed at such a corner touches that
+    side off its line, its plane is fitted, and every modelled corner lies on the object."""
     monkeypatch.setattr(completion, "CORNER_PROBES", corners)
-    mesh = _lying_pyramid()
-    rec = completion.completing(StepperExplorer()).explore(mesh, seed=0)
+    mesh = _lying_prism()
+    rec = completion.completing(StepperExplorer()).explore(mesh, seed=1)
     model = build_model(rec)
     assert model.polyhedron is not None
     outside = -trimesh.proximity.signed_distance(mesh, model.polyhedron.vertices)
     if corners:
-        assert float(outside.max()) < 2.0 * RHO, outside
+        assert float(outside.max()) < RHO, outside
+        assert rec.ending == "closed", rec.notes
     else:
-        assert float(outside.max()) > 3.0 * RHO, outside
+        assert float(outside.max()) > 0.05, outside
