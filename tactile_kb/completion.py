@@ -384,7 +384,7 @@ def corner_juts(model: ObjectModel) -> FloatArray:
     )
     if len(outside):  # the nearest point of every hull triangle to every corner outside it
         q = np.repeat(verts[outside], len(tris), axis=0)
-        foot = closest_point(np.tile(tris, (len(outside), 1, 1)), q)
+        foot = closest_point(np.tile(tris, (len(outside), 1, 1)), q)  # type: ignore[no-untyped-call]
         dist = np.linalg.norm(foot - q, axis=1).reshape(len(outside), len(tris))
         out[outside] = dist.min(axis=1)
     return out

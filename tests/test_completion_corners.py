@@ -54,7 +54,8 @@ def test_the_corner_a_missing_face_cuts_off_is_probed_first() -> None:
     juts = corner_juts(model)
     at = int(np.argmin(np.linalg.norm(poly.vertices - CORNER, axis=1)))
     assert np.linalg.norm(poly.vertices[at] - CORNER) < 1e-3
-    assert juts[at] == juts.max() and juts[at] > CUT / np.sqrt(3.0)
+    assert juts[at] == juts.max()
+    assert juts[at] > CUT / np.sqrt(3.0)
     probes = corner_probes(model)
     assert probes, "the cut corner is tested"
     first = probes[0]
@@ -69,7 +70,8 @@ def test_the_corner_a_missing_face_cuts_off_is_probed_first() -> None:
 
 def test_with_every_face_touched_no_corner_is_probed_there() -> None:
     model = build_model(_record(with_chamfer=True))
-    assert model.polyhedron is not None and len(model.polyhedron.faces) == 7
+    assert model.polyhedron is not None
+    assert len(model.polyhedron.faces) == 7
     for p in corner_probes(model):
         assert np.linalg.norm(np.asarray(p.target) - CORNER) > CUT
 
