@@ -110,3 +110,27 @@ def test_the_face_above_a_lying_prism_is_found_by_a_corner_probe(
         assert rec.ending == "closed", rec.notes
     else:
         assert float(outside.max()) > 0.05, outside
+
+
+@pytest.mark.parametrize("corners", [completion.CORNER_PROBES, 0])
+def test_a_scan_like_prism_gets_the_sides_its_contour_missed(
+    corners: int, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """A scan-like octagonal prism (perturbed at level 2): the contour stops early, two sides
+    are never touched, and the other sides' planes close the envelope in corners where the
+    object is not. Without corner probes (0: as before them) the model has 6 of its 8 sides;
+    with them the probes at those corners touch the missing sides, and every side is there."""
+    from tactile_kb.perturb import perturb
+
+    monkeypatch.setattr(completion, "CORNER_PROBES", corners)
+    mesh = perturb(solids.rotate_about_z(solids.prism(8, 0.0793, 0.0396), 245.8), 2, seed=0)
+    rec = completion.completing(StepperExplorer()).explore(mesh, seed=0)
+    poly = build_model(rec).polyhedron
+    assert poly is not None
+    # the truth: the ideal prism's 8 sides, whose normals are horizontal, 45° apart
+    sides = [n for n in poly.normals if abs(float(n[2])) < 0.3]
+    angles = sorted(round(float(np.degrees(np.arctan2(n[1], n[0]))) % 45) for n in sides)
+    assert len(sides) == (8 if corners else 6), angles
+    if corners:  # one direction mod 45°: the octagon's (within the perturbation's 5°)
+        spread = max(angles) - min(angles)
+        assert min(spread, 45 - spread) <= 5, angles
