@@ -15,6 +15,12 @@ the missing normal from outside the object), until
 * what stayed open cannot be reached: :attr:`CompletionParams.attempts` probes for it found
   nothing, were blocked on the way, or did not close it (``"unreachable"``).
 
+A closed model can still be wrong: a face no touch found is cut off, and its neighbours'
+planes meet in a corner where the object is not. Probes that test the model (where the
+contour's free path passed inside it, where the visual hint reaches beyond it, and at corners
+that jut out from the touched points: :func:`corner_probes`) are each tried once, within the
+same budget, and never hold the completion open.
+
 The record says which happened (``record.ending``, ``record.unreachable`` and a note). The
 controller computes no geometry: it carries out probes given as plain values; this module,
 above it, computes them from the model.
@@ -436,14 +442,17 @@ def corner_probes(model: ObjectModel) -> list[Probe]:
     * 2 ρ + 3 σ (a corner within the tip's size of the touches is as good as touched; σ the
       declared noise), and 5 % of the model's diameter (a smaller cut changes no feature);
 
-    and a face the model left out as concave does not cut it off (the hollow of an L-block is
-    known already). The probe approaches along the corner's outward direction (the mean of its
-    faces' normals), aimed at it from outside, and may go as far beyond it as it juts out plus
-    2 ρ: a touch at the corner confirms it (and puts it in the touched hull); a touch deeper
-    in is a face the model lacks, which the next model has. Corners on the table, or whose
-    direction points down, are approached level, 1.5 ρ above the table (or at their own
-    height), with the head indexed towards the object, so that a face turning under meets a
-    sensor.
+    and no face the model left out as concave, with a plane its tip centres fitted, cuts it off
+    (the hollow of an L-block is known already; an unrefined concave face has the sensor's
+    quantised normal, which may be what made it look concave). The probe approaches along the
+    corner's outward direction (the mean of its faces' normals), aimed at it from outside, and
+    may go on past it until the line enters the touched hull, plus 2 ρ (when that line misses
+    the hull, it aims from the corner at the hull's middle instead). A touch at the corner
+    confirms it (and puts it in the touched hull); a touch deeper in is a face the model lacks,
+    which the next model has. Corners on the table, or whose direction points down, are left
+    to the probes near the table (:func:`_bottom_probes`): a single touch of an undercut, made
+    with the head indexed, gives the sensor's quantised normal and no slide, and measured on
+    the stable poses it spoilt more models than it mended.
     """
     poly = model.polyhedron
     record = model.record
