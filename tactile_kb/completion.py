@@ -15,6 +15,12 @@ the missing normal from outside the object), until
 * what stayed open cannot be reached: :attr:`CompletionParams.attempts` probes for it found
   nothing, were blocked on the way, or did not close it (``"unreachable"``).
 
+A closed model can still be wrong: a face no touch found is cut off, and its neighbours'
+planes meet in a corner where the object is not. Probes that test the model (where the
+contour's free path passed inside it, where the visual hint reaches beyond it, and at corners
+that jut out from the touched points: :func:`corner_probes`) are each tried once, within the
+same budget, and never hold the completion open.
+
 The record says which happened (``record.ending``, ``record.unreachable`` and a note). The
 controller computes no geometry: it carries out probes given as plain values; this module,
 above it, computes them from the model.
@@ -37,6 +43,7 @@ from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
+from scipy.spatial import ConvexHull, QhullError
 
 from tactile_kb.errors import TactileKBError, UsageError
 from tactile_kb.geometry.model import ObjectModel, build_model
@@ -49,11 +56,14 @@ from tactile_kb.touch.servo import Ending, Probe
 from tactile_kb.types import FloatArray
 
 __all__ = [
+    "CORNER_PROBES",
     "DEFAULT_COMPLETION",
     "CompletionParams",
     "ModelCompleter",
     "completing",
     "completion_probes",
+    "corner_juts",
+    "corner_probes",
     "model_completer",
 ]
 
@@ -66,12 +76,22 @@ normal no better than its neighbours', and a touch off the line then fits nothin
 
 _PATH = "the path passes inside the model"
 _HINT = "the hint reaches beyond the model"
-_TESTS = (_PATH, _HINT)  # probes that test the model, never holding the completion open
+_CORNER = "a corner juts out"
+_TESTS = (_PATH, _HINT, _CORNER)  # probes that test the model, never holding the completion open
 
 PATH_PROBES = 4
 """At most this many probes per exploration where a contour's path passed inside the model, or
 the hint box reaches past it (:func:`completion_probes`): tests of a corner or a part the
 envelope may have wrong, each tried once, never items that hold the completion open."""
+
+CORNER_PROBES = 3
+"""At most this many corner checks per exploration (:func:`corner_probes`): each tests one
+modelled corner that juts out from the touched points far more than the model's other corners
+do, once; like the path's, they never hold the completion open."""
+
+CORNER_OUTLIER = 1.5
+"""A corner is checked when it juts out from the touched points more than this many times the
+median of the model's corners (:func:`corner_probes`)."""
 
 TOP_NZ = DEFAULTS.explore.top_nz
 """A face whose normal's z component is at least this is a top, probed from above when its tip
@@ -238,6 +258,7 @@ def completion_probes(model: ObjectModel, *, height_gap: float | None = None) ->
     probes += _low_side_probes(model, centres, rho)
     probes += _beyond_model_probes(model, rho)
     probes += _free_path_probes(model, rho)
+    probes += corner_probes(model)
     return probes
 
 
@@ -338,6 +359,157 @@ def _free_path_probes(model: ObjectModel, rho: float, *, most: int = 4) -> list[
         )
         if len(out) >= most:
             break
+    return out
+
+
+def corner_juts(model: ObjectModel) -> FloatArray:
+    """How far (m) each vertex of the model's polyhedron lies outside the convex hull of the
+    touched points (the contacts' surface points ``r1``); zeros without a polyhedron.
+
+    A corner of the envelope is where the planes of touched faces meet: no touch found it.
+    Where it lies far outside what was touched, a face nobody touched may cut it off.
+    """
+    poly = model.polyhedron
+    if poly is None:
+        return np.zeros(0)
+    pts = np.asarray([c.point for c in model.record.contacts], dtype=float).reshape(-1, 3)
+    verts = np.asarray(poly.vertices, dtype=float)
+    if len(pts) == 0:
+        return np.zeros(len(verts))
+    hull = _touched_hull(model)
+    if hull is None:  # the touched points lie in a plane: their distances
+        return np.asarray(
+            np.linalg.norm(verts[:, None, :] - pts[None, :, :], axis=2).min(axis=1), dtype=float
+        )
+    from trimesh.triangles import closest_point
+
+    tris = pts[hull.simplices]
+    out = np.zeros(len(verts))
+    outside = np.flatnonzero(
+        (verts @ hull.equations[:, :3].T + hull.equations[:, 3]).max(axis=1) > 0
+    )
+    if len(outside):  # the nearest point of every hull triangle to every corner outside it
+        q = np.repeat(verts[outside], len(tris), axis=0)
+        foot = closest_point(np.tile(tris, (len(outside), 1, 1)), q)  # type: ignore[no-untyped-call]
+        dist = np.linalg.norm(foot - q, axis=1).reshape(len(outside), len(tris))
+        out[outside] = dist.min(axis=1)
+    return out
+
+
+def _touched_hull(model: ObjectModel) -> ConvexHull | None:
+    """The convex hull of the touched points (the contacts' ``r1``), or None when they span
+    no volume."""
+    pts = np.asarray([c.point for c in model.record.contacts], dtype=float).reshape(-1, 3)
+    if len(pts) < 4:
+        return None
+    try:
+        return ConvexHull(pts)
+    except (QhullError, ValueError):
+        return None
+
+
+def _ray_into(hull: ConvexHull, start: FloatArray, direction: FloatArray) -> float | None:
+    """How far from ``start`` along ``direction`` the line enters the convex ``hull`` (0 when
+    it starts inside), or None when it misses it."""
+    a, b = hull.equations[:, :3], hull.equations[:, 3]
+    side = a @ start + b  # ≤ 0 inside each plane
+    rate = a @ direction
+    enter, leave = 0.0, math.inf
+    for s_k, r_k in zip(side, rate, strict=True):
+        if abs(r_k) < 1e-12:
+            if s_k > 0:
+                return None
+            continue
+        t = -s_k / r_k
+        if r_k < 0:
+            enter = max(enter, t)
+        else:
+            leave = min(leave, t)
+    return enter if enter <= leave else None
+
+
+def corner_probes(model: ObjectModel) -> list[Probe]:
+    """Probes that test the model's corners that jut out from the touched points, furthest
+    first.
+
+    A closed envelope can still be wrong: a face no touch found is cut off the model, and the
+    planes of its neighbours meet in a corner where the object is not (a lying pyramid's
+    undercut side, a face above the top layer). Such a corner lies further outside the convex
+    hull of the touched points (:func:`corner_juts`) than the model's other corners, which the
+    contour layers' spacing keeps alike. A corner is tested when it juts out more than
+
+    * :data:`CORNER_OUTLIER` × the median of the model's corners,
+    * 2 ρ + 3 σ (a corner within the tip's size of the touches is as good as touched; σ the
+      declared noise), and 5 % of the model's diameter (a smaller cut changes no feature);
+
+    and no face the model left out as concave, with a plane its tip centres fitted, cuts it off
+    (the hollow of an L-block is known already; an unrefined concave face has the sensor's
+    quantised normal, which may be what made it look concave). The probe approaches along the
+    corner's outward direction (the mean of its faces' normals), aimed at it from outside, and
+    may go on past it until the line enters the touched hull, plus 2 ρ (when that line misses
+    the hull, it aims from the corner at the hull's middle instead). A touch at the corner
+    confirms it (and puts it in the touched hull); a touch deeper in is a face the model lacks,
+    which the next model has. Corners on the table, or whose direction points down, are left
+    to the probes near the table (:func:`_bottom_probes`): a single touch of an undercut, made
+    with the head indexed, gives the sensor's quantised normal and no slide, and measured on
+    the stable poses it spoilt more models than it mended.
+    """
+    poly = model.polyhedron
+    record = model.record
+    if poly is None or not record.contacts:
+        return []
+    rho, sigma = record.tip_radius, record.noise
+    juts = corner_juts(model)
+    hull = _touched_hull(model)
+    if len(juts) < 4 or hull is None:
+        return []
+    middle = np.asarray(hull.points, dtype=float).mean(axis=0)
+    size = float(np.linalg.norm(np.ptp(poly.vertices, axis=0)))
+    limit = max(2.0 * rho + 3.0 * sigma, 0.05 * size, CORNER_OUTLIER * float(np.median(juts)))
+    tol = 0.25 * rho + 3.0 * sigma
+    # concave faces whose plane the tip centres fitted (an unrefined one has the sensor's
+    # quantised normal, which may be what made it look concave)
+    concave = [
+        f
+        for f, keep in zip(model.faces, model.supporting, strict=False)
+        if not keep and f.source == "contacts" and f.refined
+    ]
+    table = {
+        k
+        for k in range(len(poly.faces))
+        if k < len(model.face_of)
+        and model.face_of[k] >= 0
+        and model.faces[model.face_of[k]].source == "table"
+    }
+    out: list[Probe] = []
+    for i in np.argsort(-juts):
+        jut = float(juts[i])
+        if jut <= limit:
+            break
+        v = np.asarray(poly.vertices[i], dtype=float)
+        if any(float(f.normal_array @ v) - f.offset > tol for f in concave):
+            continue
+        around = [k for k, verts in enumerate(poly.faces) if int(i) in verts]
+        normals = poly.normals[[k for k in around if k not in table]]
+        if len(normals) == 0:
+            continue
+        n = normals.sum(axis=0)
+        if float(np.linalg.norm(n)) < 1e-9:
+            continue
+        n = n / float(np.linalg.norm(n))
+        if len(around) > len(normals) or n[2] < -0.2:
+            continue  # on the table or under the object: the bottom probes' business
+        depth = _ray_into(hull, v, -n)
+        if depth is None:  # the line misses what was touched: aim at its middle instead
+            n = v - middle
+            n = n / float(np.linalg.norm(n))
+            depth = _ray_into(hull, v, -n)
+            if depth is None or n[2] < -0.2:
+                continue
+        target = v + rho * n
+        out.append(
+            Probe(_v(target), _v(n), depth + 2.0 * rho, f"{_CORNER} at {_name(v * 1000.0)} mm")
+        )
     return out
 
 
@@ -728,6 +900,7 @@ class ModelCompleter:
         self._start: tuple[int, float] | None = None
         self._tried: Counter[str] = Counter()
         self._path_probes = 0
+        self._corner_probes = 0
         self.probes = 0
 
     def _budget(self, record: ExplorationRecord, model: ObjectModel) -> tuple[int, float]:
@@ -765,8 +938,7 @@ class ModelCompleter:
         wanted = [
             p
             for p in completion_probes(model, height_gap=self.params.height_gap)
-            if not p.reason.startswith(_TESTS)
-            or (self._path_probes < PATH_PROBES and not self._tried[p.reason])
+            if self._allowed(p)
         ]
         open_items = [p.reason for p in wanted if not p.reason.startswith(_TESTS)]
         if model.polyhedron is None and not wanted:
@@ -815,8 +987,23 @@ class ModelCompleter:
         ):
             probe = _nearer_the_touches(record, probe)
         self._tried[probe.reason] += 1
-        self._path_probes += probe.reason.startswith(_TESTS)
+        if probe.reason.startswith(_CORNER):
+            self._corner_probes += 1
+        elif probe.reason.startswith(_TESTS):
+            self._path_probes += 1
         return probe
+
+    def _allowed(self, p: Probe) -> bool:
+        """Whether ``p`` may be asked for: what holds the completion open always; a test of
+        the model once, while its kind's allowance (:data:`PATH_PROBES`,
+        :data:`CORNER_PROBES`) lasts."""
+        if not p.reason.startswith(_TESTS):
+            return True
+        if self._tried[p.reason]:
+            return False
+        if p.reason.startswith(_CORNER):
+            return self._corner_probes < CORNER_PROBES
+        return self._path_probes < PATH_PROBES
 
 
 def model_completer(params: CompletionParams | None = None) -> Callable[[], ModelCompleter]:
