@@ -89,6 +89,11 @@ point this close to the surface's normal is the surface followed (a real face tu
 an edge: 30° and more between the faces of a 12-sided prism)."""
 
 
+PERSIST_TRIES = 3
+"""How often a blocked slide's re-acquisition (:meth:`Controller._persist`) backs off and steps
+on, each time twice as far (0.8, 1.6, 3.2 tip radii), before the contour ends."""
+
+
 @dataclass(frozen=True)
 class ServoParams:
     """Lengths and switches of the servo logic (metres), scaled to objects of 2–30 cm.
@@ -323,6 +328,7 @@ class Controller:
         self.motions = 0
         self.rereads = 0  # touches recovered by reading the sensors again at rest
         self.rides = 0  # irregularities ridden over while sliding
+        self.persisted = 0  # blocked slides after which the surface was re-acquired
         self._layer_motions = 0
         self._phase = "first-contact"
         self._layer: int | None = None
@@ -475,7 +481,12 @@ class Controller:
                 if self.rereads
                 else []
             )
-            + ([f"{self.rides} surface irregularities ridden over"] if self.rides else []),
+            + ([f"{self.rides} surface irregularities ridden over"] if self.rides else [])
+            + (
+                [f"{self.persisted} blocked slide(s) followed by re-acquiring the surface"]
+                if self.persisted
+                else []
+            ),
             ending=self.ending.status if self.ending else "",
             unreachable=list(self.ending.unreachable) if self.ending else [],
             orientations=list(self.orientations),
@@ -1046,6 +1057,13 @@ class Controller:
                 fresh, since = len(self.contacts) - 1, 0.0
                 continue
             self._record(m, f, "slide")
+            if m.event == "blocked" and p.comply:
+                again = self._persist(pos, m.direction, f)
+                if again is not None:
+                    pos, f, touched = again
+                    if touched:
+                        fresh, since = len(self.contacts) - 1, 0.0
+                    continue
             what = {
                 "none": "the slide found no end",
                 "limit": "the workspace ends",
@@ -1055,6 +1073,85 @@ class Controller:
             return False, pos, f
         self._note(f"contour budget of {p.max_layer_motions} motions exhausted")
         return False, pos, f
+
+    def _persist(
+        self,
+        start: FloatArray,
+        direction: FloatArray | Vec3,
+        f: _Follow,
+        *,
+        here: FloatArray | None = None,
+        leg: FloatArray | None = None,
+    ) -> tuple[FloatArray, _Follow, bool] | None:
+        """Re-acquire the surface of ``f`` where it stopped the finger without a sensor change
+        at ``start``, following the contour along ``direction``: a slide blocked after riding
+        over the obstacle failed, or a search cycle that met the object only blind (the finger
+        at ``here``, pressed along ``leg`` when the last motion was the blind one). Returns
+        (position, follow, whether it was a new touch), or None (the contour ends).
+
+        The finger backs off horizontally from the surface, steps on along the slide, and
+        searches back towards the object as the paper's cycle does (``l2``, then ``l3`` back):
+        a contact on the way is followed. A contact whose sensors include one of the followed
+        group, or point within :data:`RIDE_DEG` of the approach, is the surface followed (a
+        ``"slide"`` contact); any other is a new touch. When the approach meets the object
+        blind, or comes back no further along the slide, the finger backs off and steps twice
+        as far, up to :data:`PERSIST_TRIES` times: the obstacle is at most a few tip radii
+        long, and the layer's motion budget bounds the whole contour.
+        """
+        p = self.params
+        t = _unit(np.array([direction[0], direction[1], 0.0]))
+        towards = _unit(np.cross(_Z, t))
+        if float(np.linalg.norm(t)) < 0.5:
+            return None
+        start = np.asarray(start, dtype=float)
+        step = current().servo.ride_step * self.rho
+        here = start if here is None else np.asarray(here, dtype=float)
+        if leg is not None:  # pressed blind against the object: back out the way it came
+            here = np.asarray(self._move_on(here, -leg, 2.0 * self.bump).end, dtype=float)
+        for attempt in range(PERSIST_TRIES):
+            scale = float(2**attempt)
+            back = self._move_on(here, -towards, scale * 2.0 * self.bump)
+            here = np.asarray(back.end, dtype=float)
+            if back.event not in ("none", "release"):
+                continue
+            fwd = self._move_on(here, t, scale * step)
+            here = np.asarray(fwd.end, dtype=float)
+            hit: Motion | None = None
+            if fwd.event == "touch":
+                hit = fwd
+            elif fwd.event == "none":
+                press = self._move(here, towards, scale * 2.0 * self.bump + p.l2)
+                here = np.asarray(press.end, dtype=float)
+                if press.event == "touch":
+                    hit = press
+                elif press.event == "none":  # the surface fell away: the cycle goes on
+                    found = self._search(here, t, f, first=False, persist=False)
+                    if found is None:
+                        return None
+                    npos, nf = found
+                    self.persisted += 1
+                    return npos, nf, True
+            if hit is None or float((np.asarray(hit.end) - start) @ t) < 0.25 * step:
+                continue
+            self.persisted += 1
+            if hit is fwd or not self._kin(hit, f, towards):
+                nf = self._follow(hit.closed)
+                self._record(hit, nf, "touch")
+                return np.asarray(hit.end, dtype=float), nf, True
+            if f.sensor not in hit.fired:  # the surface turned a little: follow what closed
+                nf = self._follow(hit.closed)
+                f.sensor, f.group, f.r0 = nf.sensor, nf.group, nf.r0
+            self._record(hit, f, "slide")
+            return np.asarray(hit.end, dtype=float), f, False
+        return None
+
+    def _kin(self, m: Motion, f: _Follow, press: FloatArray) -> bool:
+        """Whether a contact met while re-acquiring a surface is the surface followed: one of
+        the followed sensors fired, or the sensors that closed point within
+        :data:`RIDE_DEG` of the (horizontal) approach ``press``."""
+        if set(f.group) & set(m.fired):
+            return True
+        return self._same_surface(m, f, press)
 
     def _last_is_touch(self) -> bool:
         return bool(self.contacts) and self.contacts[-1].kind == "touch"
@@ -1102,14 +1199,26 @@ class Controller:
         return False
 
     def _search(
-        self, pos: FloatArray, t: FloatArray, f: _Follow
+        self,
+        pos: FloatArray,
+        t: FloatArray,
+        f: _Follow,
+        *,
+        first: bool = True,
+        persist: bool = True,
     ) -> tuple[FloatArray, _Follow] | None:
-        """The l1, l2, l3 cycle after a loss of contact; the new contact, or None."""
+        """The l1, l2, l3 cycle after a loss of contact; the new contact, or None.
+
+        ``first=False``: the cycle's first legs were already made (a re-acquisition that
+        stepped on and searched towards the object): only ``l3`` back remains. A cycle that
+        met the object only blind (no sensor fired) re-acquires it from the last blind
+        contact (:meth:`_persist`, with ``comply`` on and ``persist``) before it gives up."""
         p = self.params
         towards = np.cross(_Z, t)
         towards = _unit(np.array([towards[0], towards[1], 0.0]))
-        blind = False
-        for direction, length in ((t, p.l1), (towards, p.l2), (-t, p.l3)):
+        blind: Motion | None = None
+        legs = ((t, p.l1), (towards, p.l2), (-t, p.l3))
+        for direction, length in legs if first else legs[2:]:
             m = self._move(pos, direction, length)
             pos = np.asarray(m.end, dtype=float)
             if m.event == "touch":
@@ -1117,11 +1226,24 @@ class Controller:
                 self._record(m, nf, "touch")
                 return pos, nf
             if m.event == "blocked":
-                blind = True
+                blind = m
                 self._note(f"blind contact (no sensor fired) at {_fmt(m.end)}")
             elif m.event == "limit":
                 self._note(f"the workspace ends at {_fmt(m.end)}")
                 return None
+        last = self._last_move
+        if blind is not None and last is not None and p.comply and persist:
+            if last is not blind and last.distance > 0.0:  # back along the free last leg
+                pos = np.asarray(self._move(pos, -np.asarray(last.direction), last.distance).end)
+            again = self._persist(
+                np.asarray(blind.end, dtype=float),
+                t,
+                f,
+                here=pos,
+                leg=_unit(np.asarray(blind.direction, dtype=float)),
+            )
+            if again is not None:
+                return again[0], again[1]
         if blind:  # the object was met, only where no sensor feels it: no size can be inferred
             self._note(
                 f"the l1-l2-l3 cycle at z = {pos[2]:.4f} m met the object only where no sensor "
