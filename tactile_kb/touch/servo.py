@@ -89,6 +89,10 @@ point this close to the surface's normal is the surface followed (a real face tu
 an edge: 30° and more between the faces of a 12-sided prism)."""
 
 
+RIPPLE_DEG = 35.0
+"""Degrees: a sensor closing during a slide while the followed one stays ON is a neighbour of
+it (the 33-sensor finger's neighbours lie 30° apart) when within this angle."""
+
 PERSIST_TRIES = 3
 """How often a blocked slide's re-acquisition (:meth:`Controller._persist`) backs off and steps
 on, each time twice as far (0.8, 1.6, 3.2 tip radii), before the contour ends."""
@@ -329,6 +333,7 @@ class Controller:
         self.rereads = 0  # touches recovered by reading the sensors again at rest
         self.rides = 0  # irregularities ridden over while sliding
         self.persisted = 0  # blocked slides after which the surface was re-acquired
+        self.ripples = 0  # sensors closing during a slide on the same surface, turned a little
         self._layer_motions = 0
         self._phase = "first-contact"
         self._layer: int | None = None
@@ -482,6 +487,13 @@ class Controller:
                 else []
             )
             + ([f"{self.rides} surface irregularities ridden over"] if self.rides else [])
+            + (
+                [
+                    f"{self.ripples} sensor change(s) on a rippled surface followed as the same surface"
+                ]
+                if self.ripples
+                else []
+            )
             + (
                 [f"{self.persisted} blocked slide(s) followed by re-acquiring the surface"]
                 if self.persisted
@@ -1036,6 +1048,10 @@ class Controller:
                 edges.edge(fresh, segs[-1] if travelled > 0 else None)
                 fresh = None
             if m.event == "touch":
+                if p.comply and fresh is None and self._ripple(m, f):
+                    self.ripples += 1
+                    self._record(m, f, "slide")  # the same surface, turned a little
+                    continue
                 if not edge:
                     self._record(m, f, "slide")  # the end of the surface followed
                 f = self._follow(m.closed)
@@ -1144,6 +1160,20 @@ class Controller:
             self._record(hit, f, "slide")
             return np.asarray(hit.end, dtype=float), f, False
         return None
+
+    def _ripple(self, m: Motion, f: _Follow) -> bool:
+        """Whether a sensor closing during a slide is a ripple of the surface followed (a scan's
+        vertex noise or bump turning the contact a little), not a new surface: the followed
+        sensor stays ON, every sensor that closed is a neighbour of it (within
+        :data:`RIPPLE_DEG`), and the sensors ON now point within :data:`RIDE_DEG` of r0 on
+        average. A new face met in a straight slide turns the contact by its whole angle."""
+        if f.sensor not in m.fired or not m.closed:
+            return False
+        cos_n = math.cos(math.radians(RIPPLE_DEG))
+        if not bool((self._dirs[list(m.closed)] @ self._dirs[f.sensor] >= cos_n).all()):
+            return False
+        mean = _unit(self._dirs[list(m.fired)].sum(axis=0))
+        return float(mean @ f.r0) >= math.cos(math.radians(current().servo.ride_deg))
 
     def _kin(self, m: Motion, f: _Follow, press: FloatArray) -> bool:
         """Whether a contact met while re-acquiring a surface is the surface followed: one of
