@@ -142,3 +142,13 @@ def test_re_acquiring_is_bounded_where_no_slide_ever_goes_on() -> None:
     assert len(rec.layers) <= 3
     assert controller.motions <= 3 * (300 + 10) + 20
     assert all(np.isfinite(np.asarray(p)).all() for p in rec.path)
+
+
+def test_no_persist_tries_ends_the_contour_at_the_blocked_slide() -> None:
+    from tactile_kb import settings
+
+    with settings.override(servo={"persist_tries": 0}):
+        rec = layers_only().explore(rough("bumps", 0), seed=0)
+    assert not all(layer.closed for layer in rec.layers)
+    assert any("blocked the slide without a sensor change" in n for n in rec.notes), rec.notes
+    assert not any(n.endswith("followed by re-acquiring the surface") for n in rec.notes)

@@ -24,6 +24,10 @@
   it steps away from the face, goes up, and searches back. In the last plane (the next one
   would be over the top) the contour is closed without touching the first surface again:
   when the surface before it ends where the layer began.
+* **Persistence (``comply``).** A finger under force control rides over a scan's bumps and
+  ripples (back off, step on, press back); a slide still blocked without a sensor change
+  backs off, steps on and searches back as the cycle does, and re-acquires the surface: it
+  is never the end of the exploration, only the layer's motion budget is.
 * **Edges are not surfaces.** A touch whose slide rolls off at once (within ``edge_slide``)
   touched an edge or a vertex; its contact is dropped from the record, unless such touches
   come three or more in a row (a curved surface is all edges to a sliding tip). A layer
@@ -89,11 +93,11 @@ point this close to the surface's normal is the surface followed (a real face tu
 an edge: 30° and more between the faces of a 12-sided prism)."""
 
 
-RIPPLE_DEG = 35.0
+RIPPLE_DEG = DEFAULTS.servo.ripple_deg
 """Degrees: a sensor closing during a slide while the followed one stays ON is a neighbour of
 it (the 33-sensor finger's neighbours lie 30° apart) when within this angle."""
 
-PERSIST_TRIES = 3
+PERSIST_TRIES = DEFAULTS.servo.persist_tries
 """How often a blocked slide's re-acquisition (:meth:`Controller._persist`) backs off and steps
 on, each time twice as far (0.8, 1.6, 3.2 tip radii), before the contour ends."""
 
@@ -142,7 +146,11 @@ class ServoParams:
         Ride over small irregularities of a surface slid along, as a finger under force
         control does (see :meth:`Controller._ride`): a slide stopped without a sensor change
         backs off, steps over and presses on again; a slide that loses the surface presses
-        back onto it. Off: the paper's rules alone (a blocked slide ends the contour).
+        back onto it. A slide still blocked re-acquires the surface as the search cycle does
+        (:meth:`Controller._persist`), and so does a cycle that met the object only blind; a
+        neighbouring sensor closing while the followed one stays ON is a ripple of the same
+        surface (:meth:`Controller._ripple`). Off: the paper's rules alone (a blocked slide
+        ends the contour).
     bump
         The largest irregularity (bump, ripple, relief) ridden over, metres; ``None``:
         ρ / 4 (1.25 mm for the 5 mm tip).
@@ -1134,7 +1142,7 @@ class Controller:
         here = start if here is None else np.asarray(here, dtype=float)
         if leg is not None:  # pressed blind against the object: back out the way it came
             here = np.asarray(self._move_on(here, -leg, 2.0 * self.bump).end, dtype=float)
-        for attempt in range(PERSIST_TRIES):
+        for attempt in range(current().servo.persist_tries):
             scale = float(2**attempt)
             back = self._move_on(here, -towards, scale * 2.0 * self.bump)
             here = np.asarray(back.end, dtype=float)
@@ -1179,7 +1187,7 @@ class Controller:
         average. A new face met in a straight slide turns the contact by its whole angle."""
         if f.sensor not in m.fired or not m.closed:
             return False
-        cos_n = math.cos(math.radians(RIPPLE_DEG))
+        cos_n = math.cos(math.radians(current().servo.ripple_deg))
         if not bool((self._dirs[list(m.closed)] @ self._dirs[f.sensor] >= cos_n).all()):
             return False
         mean = _unit(self._dirs[list(m.fired)].sum(axis=0))
