@@ -1116,6 +1116,7 @@ class Controller:
         *,
         here: FloatArray | None = None,
         leg: FloatArray | None = None,
+        new: bool = False,
     ) -> tuple[FloatArray, _Follow, bool] | None:
         """Re-acquire the surface of ``f`` where it stopped the finger without a sensor change
         at ``start``, following the contour along ``direction``: a slide blocked after riding
@@ -1127,7 +1128,8 @@ class Controller:
         searches back towards the object as the paper's cycle does (``l2``, then ``l3`` back):
         a contact on the way is followed. A contact whose sensors include one of the followed
         group, or point within :data:`RIDE_DEG` of the approach, is the surface followed (a
-        ``"slide"`` contact); any other is a new touch. When the approach meets the object
+        ``"slide"`` contact); any other (every one with ``new``: after a search cycle, the
+        surface searched for is the next one) is a new touch. When the approach meets the object
         blind, or comes back no further along the slide, the finger backs off and steps twice
         as far, up to :data:`PERSIST_TRIES` times: the obstacle is at most a few tip radii
         long, and the layer's motion budget bounds the whole contour.
@@ -1168,7 +1170,7 @@ class Controller:
             if hit is None or float((np.asarray(hit.end) - start) @ t) < 0.25 * step:
                 continue
             self.persisted += 1
-            if hit is fwd or not self._kin(hit, f, towards):
+            if new or hit is fwd or not self._kin(hit, f, towards):
                 nf = self._follow(hit.closed)
                 self._record(hit, nf, "touch")
                 return np.asarray(hit.end, dtype=float), nf, True
@@ -1289,6 +1291,7 @@ class Controller:
                 f,
                 here=pos,
                 leg=_unit(np.asarray(blind.direction, dtype=float)),
+                new=True,
             )
             if again is not None:
                 return again[0], again[1]
