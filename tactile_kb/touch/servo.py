@@ -342,6 +342,7 @@ class Controller:
         self.rides = 0  # irregularities ridden over while sliding
         self.persisted = 0  # blocked slides after which the surface was re-acquired
         self.ripples = 0  # sensors closing during a slide on the same surface, turned a little
+        self.dents = 0  # search cycles that found the same face again beyond a dent
         self._layer_motions = 0
         self._phase = "first-contact"
         self._layer: int | None = None
@@ -500,6 +501,11 @@ class Controller:
                     f"{self.ripples} sensor change(s) on a rippled surface followed as the same surface"
                 ]
                 if self.ripples
+                else []
+            )
+            + (
+                [f"{self.dents} search cycle(s) found the same face again beyond a dent"]
+                if self.dents
                 else []
             )
             + (
@@ -1084,10 +1090,16 @@ class Controller:
                 fresh = None
                 if last and self._before_first([g for g in segs if not g.edge], pos, f):
                     return True, pos, f
+                before = f
                 found = self._search(pos, np.asarray(m.direction, dtype=float), f)
                 if found is None:
                     return False, np.asarray(self._last_pos, dtype=float), f
                 pos, f = found
+                if p.comply and not edge and segs and self._dent(segs[-1], before, f, pos):
+                    # the same face beyond a dent: a slide contact, the finger follows on
+                    self.contacts[-1] = self.contacts[-1].model_copy(update={"kind": "slide"})
+                    self.dents += 1
+                    continue
                 fresh, since = len(self.contacts) - 1, 0.0
                 continue
             self._record(m, f, "slide")
@@ -1180,6 +1192,26 @@ class Controller:
             self._record(hit, f, "slide")
             return np.asarray(hit.end, dtype=float), f, False
         return None
+
+    def _dent(self, seg: _Segment, before: _Follow, f: _Follow, pos: FloatArray) -> bool:
+        """Whether the contact ``f`` at ``pos`` that a search cycle found after the surface
+        ``before`` (slid along as ``seg``) fell away is the same face beyond a dent or a rough
+        patch: its tip centre lies within 2 ``bump`` of the line the tip centres followed on
+        that face, and its sensors point within 60° of ``before``'s (a rough scan's local
+        normal swings by 30–50° from one contact to the next, so the position decides). Past a
+        real edge turned by θ the search (``l1`` on, then towards the object) meets the next
+        face about l1 · tan θ off that line: 2.5 mm at 17°, 4.6 mm for the 30° edges of a
+        12-sided prism; faces meeting at less than that are one face to the touch count (the
+        model is built from the contacts, whatever their kind)."""
+        if float(f.r0 @ before.r0) < 0.5:
+            return False
+        u = np.array([seg.direction[0], seg.direction[1]])
+        nu = float(np.linalg.norm(u))
+        if nu < 1e-9:
+            return False
+        d = np.asarray(pos, dtype=float)[:2] - np.asarray(seg.start, dtype=float)[:2]
+        off = abs(float(d[0] * u[1] - d[1] * u[0])) / nu
+        return off <= 2.0 * self.bump
 
     def _ripple(self, m: Motion, f: _Follow) -> bool:
         """Whether a sensor closing during a slide is a ripple of the surface followed (a scan's
