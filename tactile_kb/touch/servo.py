@@ -147,8 +147,7 @@ class ServoParams:
         control does (see :meth:`Controller._ride`): a slide stopped without a sensor change
         backs off, steps over and presses on again; a slide that loses the surface presses
         back onto it. A slide still blocked re-acquires the surface as the search cycle does
-        (:meth:`Controller._persist`), and so does a cycle that met the object only blind; a
-        neighbouring sensor closing while the followed one stays ON is a ripple of the same
+        (:meth:`Controller._persist`); a neighbouring sensor closing while the followed one stays ON is a ripple of the same
         surface (:meth:`Controller._ripple`). Off: the paper's rules alone (a blocked slide
         ends the contour).
     bump
@@ -1125,23 +1124,17 @@ class Controller:
         start: FloatArray,
         direction: FloatArray | Vec3,
         f: _Follow,
-        *,
-        here: FloatArray | None = None,
-        leg: FloatArray | None = None,
-        new: bool = False,
     ) -> tuple[FloatArray, _Follow, bool] | None:
-        """Re-acquire the surface of ``f`` where it stopped the finger without a sensor change
-        at ``start``, following the contour along ``direction``: a slide blocked after riding
-        over the obstacle failed, or a search cycle that met the object only blind (the finger
-        at ``here``, pressed along ``leg`` when the last motion was the blind one). Returns
+        """Re-acquire the surface of ``f`` where a slide along ``direction`` was blocked at
+        ``start`` without a sensor change and riding over the obstacle failed. Returns
         (position, follow, whether it was a new touch), or None (the contour ends).
 
         The finger backs off horizontally from the surface, steps on along the slide, and
         searches back towards the object as the paper's cycle does (``l2``, then ``l3`` back):
         a contact on the way is followed. A contact whose sensors include one of the followed
         group, or point within :data:`RIDE_DEG` of the approach, is the surface followed (a
-        ``"slide"`` contact); any other (every one with ``new``: after a search cycle, the
-        surface searched for is the next one) is a new touch. When the approach meets the object
+        ``"slide"`` contact); any other is a new touch. A wall no sensor feels ahead of the
+        step ends the re-acquisition (not an irregularity). When the approach meets the object
         blind, or comes back no further along the slide, the finger backs off and steps twice
         as far, up to :data:`PERSIST_TRIES` times: the obstacle is at most a few tip radii
         long, and the layer's motion budget bounds the whole contour.
@@ -1153,9 +1146,7 @@ class Controller:
             return None
         start = np.asarray(start, dtype=float)
         step = current().servo.ride_step * self.rho
-        here = start if here is None else np.asarray(here, dtype=float)
-        if leg is not None:  # pressed blind against the object: back out the way it came
-            here = np.asarray(self._move_on(here, -leg, 2.0 * self.bump).end, dtype=float)
+        here = start
         for attempt in range(current().servo.persist_tries):
             scale = float(2**attempt)
             back = self._move_on(here, -towards, scale * 2.0 * self.bump)
@@ -1165,6 +1156,8 @@ class Controller:
             fwd = self._move_on(here, t, scale * step)
             here = np.asarray(fwd.end, dtype=float)
             hit: Motion | None = None
+            if fwd.event == "blocked":  # a wall no sensor feels ahead: not an irregularity
+                return None
             if fwd.event == "touch":
                 hit = fwd
             elif fwd.event == "none":
@@ -1173,7 +1166,7 @@ class Controller:
                 if press.event == "touch":
                     hit = press
                 elif press.event == "none":  # the surface fell away: the cycle goes on
-                    found = self._search(here, t, f, first=False, persist=False)
+                    found = self._search(here, t, f, first=False)
                     if found is None:
                         return None
                     npos, nf = found
@@ -1182,7 +1175,7 @@ class Controller:
             if hit is None or float((np.asarray(hit.end) - start) @ t) < 0.25 * step:
                 continue
             self.persisted += 1
-            if new or hit is fwd or not self._kin(hit, f, towards):
+            if hit is fwd or not self._kin(hit, f, towards):
                 nf = self._follow(hit.closed)
                 self._record(hit, nf, "touch")
                 return np.asarray(hit.end, dtype=float), nf, True
@@ -1287,18 +1280,17 @@ class Controller:
         f: _Follow,
         *,
         first: bool = True,
-        persist: bool = True,
     ) -> tuple[FloatArray, _Follow] | None:
         """The l1, l2, l3 cycle after a loss of contact; the new contact, or None.
 
         ``first=False``: the cycle's first legs were already made (a re-acquisition that
         stepped on and searched towards the object): only ``l3`` back remains. A cycle that
-        met the object only blind (no sensor fired) re-acquires it from the last blind
-        contact (:meth:`_persist`, with ``comply`` on and ``persist``) before it gives up."""
+        met the object only blind (no sensor fired) ends the contour: on ideal solids lying
+        in any pose that is an overhang, which the completion probes with the head indexed."""
         p = self.params
         towards = np.cross(_Z, t)
         towards = _unit(np.array([towards[0], towards[1], 0.0]))
-        blind: Motion | None = None
+        blind = False
         legs = ((t, p.l1), (towards, p.l2), (-t, p.l3))
         for direction, length in legs if first else legs[2:]:
             m = self._move(pos, direction, length)
@@ -1308,25 +1300,11 @@ class Controller:
                 self._record(m, nf, "touch")
                 return pos, nf
             if m.event == "blocked":
-                blind = m
+                blind = True
                 self._note(f"blind contact (no sensor fired) at {_fmt(m.end)}")
             elif m.event == "limit":
                 self._note(f"the workspace ends at {_fmt(m.end)}")
                 return None
-        last = self._last_move
-        if blind is not None and last is not None and p.comply and persist:
-            if last is not blind and last.distance > 0.0:  # back along the free last leg
-                pos = np.asarray(self._move(pos, -np.asarray(last.direction), last.distance).end)
-            again = self._persist(
-                np.asarray(blind.end, dtype=float),
-                t,
-                f,
-                here=pos,
-                leg=_unit(np.asarray(blind.direction, dtype=float)),
-                new=True,
-            )
-            if again is not None:
-                return again[0], again[1]
         if blind:  # the object was met, only where no sensor feels it: no size can be inferred
             self._note(
                 f"the l1-l2-l3 cycle at z = {pos[2]:.4f} m met the object only where no sensor "
