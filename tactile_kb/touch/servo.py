@@ -942,26 +942,16 @@ class Controller:
         for lift in (self.bump, 2.0 * self.bump):  # a bump higher than expected: lift more
             pos = np.asarray(m.end, dtype=float)
             legs: list[tuple[FloatArray, float]] = []
-            reach = current().servo.ride_step * self.rho
-            diagonal = lift == self.bump  # off and on in one motion: the usual, cheap ride
-            if diagonal:
-                way = -r0 * lift + ahead * reach
-                step = self._move_on(pos, _unit(way), float(np.linalg.norm(way)))
-                back = step
-                legs.append((-_unit(way), float(np.linalg.norm(np.asarray(step.end) - pos))))
-            else:
-                back = self._move_on(pos, -r0, lift)
-                legs.append((r0, back.distance))
+            back = self._move_on(pos, -r0, lift)
+            legs.append((r0, back.distance))
             pos = np.asarray(back.end, dtype=float)
             if back.event in ("none", "release"):
-                if not diagonal:
-                    step = self._move(pos, ahead, reach)
-                    legs.append((-ahead, step.distance))
-                went = legs[-1][1] if diagonal else step.distance
+                step = self._move(pos, ahead, current().servo.ride_step * self.rho)
+                legs.append((-ahead, step.distance))
                 pos = np.asarray(step.end, dtype=float)
-                if step.event == "touch" and went > 0.25 * self.rho:
+                if step.event == "touch" and step.distance > 0.25 * self.rho:
                     regained = step
-                elif step.event == "none" or (diagonal and step.event == "release"):
+                elif step.event == "none":
                     press = self._move(pos, r0, lift + self.bump)
                     legs.append((-r0, press.distance))
                     if press.event == "touch":
