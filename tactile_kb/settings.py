@@ -143,10 +143,11 @@ class ServoSettings(_Group):
         "this close to it (a neighbour), is a ripple of the same surface, not a new touch.",
     )
     persist_tries: int = Field(
-        3,
+        0,
         ge=0,
         description="How often a blocked slide's re-acquisition backs off and steps on, each time "
-        "twice as far, before the contour ends (0: a blocked slide ends it, as in the paper).",
+        "twice as far, before the contour ends (0: a blocked slide ends it, as in the paper; 3 "
+        "goes round rough scans).",
     )
 
 

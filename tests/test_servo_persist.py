@@ -8,6 +8,7 @@ on each of them; the persistent servo goes round all four sides in every layer.
 
 from __future__ import annotations
 
+from collections.abc import Iterator
 from dataclasses import dataclass
 
 import numpy as np
@@ -15,7 +16,7 @@ import pytest
 import trimesh
 from scanlike import bumped, jittered
 
-from tactile_kb import solids
+from tactile_kb import settings, solids
 from tactile_kb.record import ExplorationRecord
 from tactile_kb.touch.finger import Finger
 from tactile_kb.touch.servo import Controller, ServoParams
@@ -52,6 +53,14 @@ def sides_touched(rec: ExplorationRecord, layer: int) -> set[str]:
 
 def layers_only() -> StepperExplorer:
     return StepperExplorer(ServoParams(probe=False, top=False))
+
+
+@pytest.fixture(autouse=True)
+def persisting() -> Iterator[None]:
+    """Re-acquisition on (``servo.persist_tries``, off by default until the face fitting reads
+    rough contours as flat faces)."""
+    with settings.override(servo={"persist_tries": 3}):
+        yield
 
 
 @pytest.mark.parametrize(("kind", "seed"), [("jitter", 0), ("jitter", 2), ("bumps", 1)])
@@ -145,8 +154,6 @@ def test_re_acquiring_is_bounded_where_no_slide_ever_goes_on() -> None:
 
 
 def test_no_persist_tries_ends_the_contour_at_the_blocked_slide() -> None:
-    from tactile_kb import settings
-
     with settings.override(servo={"persist_tries": 0}):
         rec = layers_only().explore(rough("bumps", 0), seed=0)
     assert not all(layer.closed for layer in rec.layers)

@@ -31,7 +31,7 @@ DOCUMENTED: dict[str, dict[str, float]] = {
         "ride_step": 0.8,
         "ride_deg": 20.0,
         "ripple_deg": 35.0,
-        "persist_tries": 3,
+        "persist_tries": 0,
     },
     "explore": {
         "noise_warn_fraction": 0.2,

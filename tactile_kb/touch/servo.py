@@ -26,8 +26,9 @@
   when the surface before it ends where the layer began.
 * **Persistence (``comply``).** A finger under force control rides over a scan's bumps and
   ripples (back off, step on, press back); a slide still blocked without a sensor change
-  backs off, steps on and searches back as the cycle does, and re-acquires the surface: it
-  is never the end of the exploration, only the layer's motion budget is.
+  backs off, steps on and searches back as the cycle does, and re-acquires the surface
+  (setting ``servo.persist_tries`` > 0): then it is never the end of the exploration, only
+  the layer's motion budget is.
 * **Edges are not surfaces.** A touch whose slide rolls off at once (within ``edge_slide``)
   touched an edge or a vertex; its contact is dropped from the record, unless such touches
   come three or more in a row (a curved surface is all edges to a sliding tip). A layer
@@ -147,7 +148,8 @@ class ServoParams:
         control does (see :meth:`Controller._ride`): a slide stopped without a sensor change
         backs off, steps over and presses on again; a slide that loses the surface presses
         back onto it. A slide still blocked re-acquires the surface as the search cycle does
-        (:meth:`Controller._persist`); a neighbouring sensor closing while the followed one stays ON is a ripple of the same
+        when the setting ``servo.persist_tries`` is > 0 (:meth:`Controller._persist`); a
+        neighbouring sensor closing while the followed one stays ON is a ripple of the same
         surface (:meth:`Controller._ripple`). Off: the paper's rules alone (a blocked slide
         ends the contour).
     bump
