@@ -135,6 +135,20 @@ class ServoSettings(_Group):
         description="Degrees: a touch while riding over an irregularity whose sensors point this "
         "close to the surface's normal is the surface followed.",
     )
+    ripple_deg: float = Field(
+        35.0,
+        gt=0,
+        lt=90,
+        description="Degrees: a sensor closing during a slide while the followed one stays ON, "
+        "this close to it (a neighbour), is a ripple of the same surface, not a new touch.",
+    )
+    persist_tries: int = Field(
+        0,
+        ge=0,
+        description="How often a blocked slide's re-acquisition backs off and steps on, each time "
+        "twice as far, before the contour ends (0: a blocked slide ends it, as in the paper; 3 "
+        "goes round rough scans).",
+    )
 
 
 class ExploreSettings(_Group):

@@ -26,7 +26,13 @@ from tactile_kb.touch.synthetic import sample_record
 DOCUMENTED: dict[str, dict[str, float | str]] = {
     "world": {"contact_tol": 1e-7, "block_tol": 1e-9, "same_contact_deg": 1.0},
     "finger": {"align_4_deg": 10.0, "max_usable_error_deg": 25.0},
-    "servo": {"curved_run": 3, "ride_step": 0.8, "ride_deg": 20.0},
+    "servo": {
+        "curved_run": 3,
+        "ride_step": 0.8,
+        "ride_deg": 20.0,
+        "ripple_deg": 35.0,
+        "persist_tries": 0,
+    },
     "explore": {
         "noise_warn_fraction": 0.2,
         "noise_object_fraction": 0.03,

@@ -24,6 +24,11 @@
   it steps away from the face, goes up, and searches back. In the last plane (the next one
   would be over the top) the contour is closed without touching the first surface again:
   when the surface before it ends where the layer began.
+* **Persistence (``comply``).** A finger under force control rides over a scan's bumps and
+  ripples (back off, step on, press back); a slide still blocked without a sensor change
+  backs off, steps on and searches back as the cycle does, and re-acquires the surface
+  (setting ``servo.persist_tries`` > 0): then it is never the end of the exploration, only
+  the layer's motion budget is.
 * **Edges are not surfaces.** A touch whose slide rolls off at once (within ``edge_slide``)
   touched an edge or a vertex; its contact is dropped from the record, unless such touches
   come three or more in a row (a curved surface is all edges to a sliding tip). A layer
@@ -89,6 +94,15 @@ point this close to the surface's normal is the surface followed (a real face tu
 an edge: 30° and more between the faces of a 12-sided prism)."""
 
 
+RIPPLE_DEG = DEFAULTS.servo.ripple_deg
+"""Degrees: a sensor closing during a slide while the followed one stays ON is a neighbour of
+it (the 33-sensor finger's neighbours lie 30° apart) when within this angle."""
+
+PERSIST_TRIES = DEFAULTS.servo.persist_tries
+"""How often a blocked slide's re-acquisition (:meth:`Controller._persist`) backs off and steps
+on, each time twice as far (0.8, 1.6, 3.2 tip radii), before the contour ends."""
+
+
 @dataclass(frozen=True)
 class ServoParams:
     """Lengths and switches of the servo logic (metres), scaled to objects of 2–30 cm.
@@ -133,7 +147,11 @@ class ServoParams:
         Ride over small irregularities of a surface slid along, as a finger under force
         control does (see :meth:`Controller._ride`): a slide stopped without a sensor change
         backs off, steps over and presses on again; a slide that loses the surface presses
-        back onto it. Off: the paper's rules alone (a blocked slide ends the contour).
+        back onto it. A slide still blocked re-acquires the surface as the search cycle does
+        when the setting ``servo.persist_tries`` is > 0 (:meth:`Controller._persist`); a
+        neighbouring sensor closing while the followed one stays ON is a ripple of the same
+        surface (:meth:`Controller._ripple`). Off: the paper's rules alone (a blocked slide
+        ends the contour).
     bump
         The largest irregularity (bump, ripple, relief) ridden over, metres; ``None``:
         ρ / 4 (1.25 mm for the 5 mm tip).
@@ -323,6 +341,9 @@ class Controller:
         self.motions = 0
         self.rereads = 0  # touches recovered by reading the sensors again at rest
         self.rides = 0  # irregularities ridden over while sliding
+        self.persisted = 0  # blocked slides after which the surface was re-acquired
+        self.ripples = 0  # sensors closing during a slide on the same surface, turned a little
+        self.dents = 0  # search cycles that found the same face again beyond a dent
         self._layer_motions = 0
         self._phase = "first-contact"
         self._layer: int | None = None
@@ -475,7 +496,24 @@ class Controller:
                 if self.rereads
                 else []
             )
-            + ([f"{self.rides} surface irregularities ridden over"] if self.rides else []),
+            + ([f"{self.rides} surface irregularities ridden over"] if self.rides else [])
+            + (
+                [
+                    f"{self.ripples} sensor change(s) on a rippled surface followed as the same surface"
+                ]
+                if self.ripples
+                else []
+            )
+            + (
+                [f"{self.dents} search cycle(s) found the same face again beyond a dent"]
+                if self.dents
+                else []
+            )
+            + (
+                [f"{self.persisted} blocked slide(s) followed by re-acquiring the surface"]
+                if self.persisted
+                else []
+            ),
             ending=self.ending.status if self.ending else "",
             unreachable=list(self.ending.unreachable) if self.ending else [],
             orientations=list(self.orientations),
@@ -1025,6 +1063,10 @@ class Controller:
                 edges.edge(fresh, segs[-1] if travelled > 0 else None)
                 fresh = None
             if m.event == "touch":
+                if p.comply and fresh is None and self._ripple(m, f):
+                    self.ripples += 1
+                    self._record(m, f, "slide")  # the same surface, turned a little
+                    continue
                 if not edge:
                     self._record(m, f, "slide")  # the end of the surface followed
                 f = self._follow(m.closed)
@@ -1039,13 +1081,26 @@ class Controller:
                 fresh = None
                 if last and self._before_first([g for g in segs if not g.edge], pos, f):
                     return True, pos, f
+                before = f
                 found = self._search(pos, np.asarray(m.direction, dtype=float), f)
                 if found is None:
                     return False, np.asarray(self._last_pos, dtype=float), f
                 pos, f = found
+                if p.comply and not edge and segs and self._dent(segs[-1], before, f, pos):
+                    # the same face beyond a dent: a slide contact, the finger follows on
+                    self.contacts[-1] = self.contacts[-1].model_copy(update={"kind": "slide"})
+                    self.dents += 1
+                    continue
                 fresh, since = len(self.contacts) - 1, 0.0
                 continue
             self._record(m, f, "slide")
+            if m.event == "blocked" and p.comply:
+                again = self._persist(pos, m.direction, f)
+                if again is not None:
+                    pos, f, touched = again
+                    if touched:
+                        fresh, since = len(self.contacts) - 1, 0.0
+                    continue
             what = {
                 "none": "the slide found no end",
                 "limit": "the workspace ends",
@@ -1055,6 +1110,115 @@ class Controller:
             return False, pos, f
         self._note(f"contour budget of {p.max_layer_motions} motions exhausted")
         return False, pos, f
+
+    def _persist(
+        self,
+        start: FloatArray,
+        direction: FloatArray | Vec3,
+        f: _Follow,
+    ) -> tuple[FloatArray, _Follow, bool] | None:
+        """Re-acquire the surface of ``f`` where a slide along ``direction`` was blocked at
+        ``start`` without a sensor change and riding over the obstacle failed. Returns
+        (position, follow, whether it was a new touch), or None (the contour ends).
+
+        The finger backs off horizontally from the surface, steps on along the slide, and
+        searches back towards the object as the paper's cycle does (``l2``, then ``l3`` back):
+        a contact on the way is followed. A contact whose sensors include one of the followed
+        group, or point within :data:`RIDE_DEG` of the approach, is the surface followed (a
+        ``"slide"`` contact); any other is a new touch. A wall no sensor feels ahead of the
+        step ends the re-acquisition (not an irregularity). When the approach meets the object
+        blind, or comes back no further along the slide, the finger backs off and steps twice
+        as far, up to :data:`PERSIST_TRIES` times: the obstacle is at most a few tip radii
+        long, and the layer's motion budget bounds the whole contour.
+        """
+        p = self.params
+        t = _unit(np.array([direction[0], direction[1], 0.0]))
+        towards = _unit(np.cross(_Z, t))
+        if float(np.linalg.norm(t)) < 0.5:
+            return None
+        start = np.asarray(start, dtype=float)
+        step = current().servo.ride_step * self.rho
+        here = start
+        for attempt in range(current().servo.persist_tries):
+            scale = float(2**attempt)
+            back = self._move_on(here, -towards, scale * 2.0 * self.bump)
+            here = np.asarray(back.end, dtype=float)
+            if back.event not in ("none", "release"):
+                continue
+            fwd = self._move_on(here, t, scale * step)
+            here = np.asarray(fwd.end, dtype=float)
+            hit: Motion | None = None
+            if fwd.event == "blocked":  # a wall no sensor feels ahead: not an irregularity
+                return None
+            if fwd.event == "touch":
+                hit = fwd
+            elif fwd.event == "none":
+                press = self._move(here, towards, scale * 2.0 * self.bump + p.l2)
+                here = np.asarray(press.end, dtype=float)
+                if press.event == "touch":
+                    hit = press
+                elif press.event == "none":  # the surface fell away: the cycle goes on
+                    found = self._search(here, t, f, first=False)
+                    if found is None:
+                        return None
+                    npos, nf = found
+                    self.persisted += 1
+                    return npos, nf, True
+            if hit is None or float((np.asarray(hit.end) - start) @ t) < 0.25 * step:
+                continue
+            self.persisted += 1
+            if hit is fwd or not self._kin(hit, f, towards):
+                nf = self._follow(hit.closed)
+                self._record(hit, nf, "touch")
+                return np.asarray(hit.end, dtype=float), nf, True
+            if f.sensor not in hit.fired:  # the surface turned a little: follow what closed
+                nf = self._follow(hit.closed)
+                f.sensor, f.group, f.r0 = nf.sensor, nf.group, nf.r0
+            self._record(hit, f, "slide")
+            return np.asarray(hit.end, dtype=float), f, False
+        return None
+
+    def _dent(self, seg: _Segment, before: _Follow, f: _Follow, pos: FloatArray) -> bool:
+        """Whether the contact ``f`` at ``pos`` that a search cycle found after the surface
+        ``before`` (slid along as ``seg``) fell away is the same face beyond a dent or a rough
+        patch: its tip centre lies within 2 ``bump`` of the line the tip centres followed on
+        that face, and its sensors point within 60° of ``before``'s (a rough scan's local
+        normal swings by 30–50° from one contact to the next, so the position decides). Past a
+        real edge turned by θ the search (``l1`` on, then towards the object) meets the next
+        face about l1 · tan θ off that line: 2.5 mm at 17°, 4.6 mm for the 30° edges of a
+        12-sided prism; faces meeting at less than that are one face to the touch count (the
+        model is built from the contacts, whatever their kind)."""
+        if float(f.r0 @ before.r0) < 0.5:
+            return False
+        u = np.array([seg.direction[0], seg.direction[1]])
+        nu = float(np.linalg.norm(u))
+        if nu < 1e-9:
+            return False
+        d = np.asarray(pos, dtype=float)[:2] - np.asarray(seg.start, dtype=float)[:2]
+        off = abs(float(d[0] * u[1] - d[1] * u[0])) / nu
+        return off <= 2.0 * self.bump
+
+    def _ripple(self, m: Motion, f: _Follow) -> bool:
+        """Whether a sensor closing during a slide is a ripple of the surface followed (a scan's
+        vertex noise or bump turning the contact a little), not a new surface: the followed
+        sensor stays ON, every sensor that closed is a neighbour of it (within
+        :data:`RIPPLE_DEG`), and the sensors ON now point within :data:`RIDE_DEG` of r0 on
+        average. A new face met in a straight slide turns the contact by its whole angle."""
+        if f.sensor not in m.fired or not m.closed:
+            return False
+        cos_n = math.cos(math.radians(current().servo.ripple_deg))
+        if not bool((self._dirs[list(m.closed)] @ self._dirs[f.sensor] >= cos_n).all()):
+            return False
+        mean = _unit(self._dirs[list(m.fired)].sum(axis=0))
+        return float(mean @ f.r0) >= math.cos(math.radians(current().servo.ride_deg))
+
+    def _kin(self, m: Motion, f: _Follow, press: FloatArray) -> bool:
+        """Whether a contact met while re-acquiring a surface is the surface followed: one of
+        the followed sensors fired, or the sensors that closed point within
+        :data:`RIDE_DEG` of the (horizontal) approach ``press``."""
+        if set(f.group) & set(m.fired):
+            return True
+        return self._same_surface(m, f, press)
 
     def _last_is_touch(self) -> bool:
         return bool(self.contacts) and self.contacts[-1].kind == "touch"
@@ -1102,14 +1266,25 @@ class Controller:
         return False
 
     def _search(
-        self, pos: FloatArray, t: FloatArray, f: _Follow
+        self,
+        pos: FloatArray,
+        t: FloatArray,
+        f: _Follow,
+        *,
+        first: bool = True,
     ) -> tuple[FloatArray, _Follow] | None:
-        """The l1, l2, l3 cycle after a loss of contact; the new contact, or None."""
+        """The l1, l2, l3 cycle after a loss of contact; the new contact, or None.
+
+        ``first=False``: the cycle's first legs were already made (a re-acquisition that
+        stepped on and searched towards the object): only ``l3`` back remains. A cycle that
+        met the object only blind (no sensor fired) ends the contour: on ideal solids lying
+        in any pose that is an overhang, which the completion probes with the head indexed."""
         p = self.params
         towards = np.cross(_Z, t)
         towards = _unit(np.array([towards[0], towards[1], 0.0]))
         blind = False
-        for direction, length in ((t, p.l1), (towards, p.l2), (-t, p.l3)):
+        legs = ((t, p.l1), (towards, p.l2), (-t, p.l3))
+        for direction, length in legs if first else legs[2:]:
             m = self._move(pos, direction, length)
             pos = np.asarray(m.end, dtype=float)
             if m.event == "touch":
