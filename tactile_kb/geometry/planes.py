@@ -72,6 +72,7 @@ __all__ = [
     "contact_arrays",
     "cut_angle",
     "edge_faces",
+    "explained_faces",
     "fit_face",
     "merge_plane_arrays",
     "merge_planes",
@@ -900,6 +901,130 @@ def edge_faces(
                 continue  # touched more than a face it lies against: explored as a face
             allowed = rounding * width + current().geometry.edge_sigmas * noise / math.sqrt(len(c))
             if float(penetration.max()) <= allowed:
+                best = k
+                break
+        if best is None:
+            return sorted(removed)
+        kept.remove(best)
+        removed.append(best)
+
+
+def _signed_distance(x: FloatArray, normals: FloatArray, offsets: FloatArray) -> FloatArray:
+    """Signed distance of each row of ``x`` to the convex set ``normals · q ≤ offsets``:
+    positive outside (to its nearest point), negative inside (to its nearest plane)."""
+    over = x @ normals.T - offsets
+    inside = over.max(axis=1) <= 0
+    q = nearest_points(x, normals, offsets)
+    return np.asarray(np.where(inside, over.max(axis=1), np.linalg.norm(x - q, axis=1)))
+
+
+def explained_faces(
+    faces: Sequence[Face],
+    supporting: Sequence[bool],
+    centres: FloatArray,
+    rho: float,
+    *,
+    noise: float = 0.0,
+    rounding: float | None = None,
+    relief: float | None = None,
+    max_faces: int = 40,
+) -> list[int]:
+    """Indices of the contact faces whose touches the other faces already explain.
+
+    A real surface makes faces that are not faces of the object: touches of a rounded edge
+    (their normals between two faces', their tip centres near both planes' line), a bump or
+    a letter under a few contacts that fired a tilted sensor, one face fitted in two halves.
+    Their tip centres lie where the tip touching the polyhedron ``P`` of the *other* faces
+    would be: at distance ρ from ``P``, less a rounded edge's inset, plus relief and noise.
+    A face of the object lies elsewhere: without it ``P`` overshoots it (a corner that is
+    not there), and its centres lie inside the ρ-offset of ``P`` by the depth of that corner.
+
+    For each centre the *misfit* ``e = dist(c, P) − ρ`` is measured (positive outside). The
+    face is explained when every one of its centres has
+
+    * ``e ≤ relief + 3σ`` (bumps and relief lift a centre by at most their height), and
+    * ``e ≥ −(r·(1/cos θ − 1) + 3σ)``: a tip on an edge rounded with radius ``r`` whose
+      surface normal there has turned by θ from a face's is at most that far inside the
+      ρ-offset of the sharp edge. ``r`` is ``rounding`` × the width of the narrowest face of
+      ``P`` the centres lie against (within ρ of its offset plane), θ the largest angle between
+      the candidate's normal and those faces' (at most 80°).
+
+    σ is the declared noise. Faces are examined fewest contacts first and removed one at a
+    time while the others still close; the table is never removed, and faces are only
+    looked for against faces at least ``geometry.edge_min_width`` tip radii wide (next to
+    narrow faces only, as on a curved object, every face stays).
+
+    Parameters
+    ----------
+    faces
+        The faces (the table included).
+    supporting
+        Per face, whether it supports the object (:func:`tactile_kb.geometry.model.build_model`):
+        only supporting faces make ``P``.
+    centres
+        (n, 3) tip centres of the record's contacts (faces index them).
+    rho
+        The tip radius.
+    noise
+        σ of the contact positions (m).
+    rounding
+        ``geometry.edge_rounding`` by default.
+    relief
+        Height of surface detail (m); by default ``geometry.relief_rho`` × ρ.
+    max_faces
+        More faces than this are not examined (a curved object's many narrow faces).
+    """
+    geo = current().geometry
+    if rounding is None:
+        rounding = geo.edge_rounding
+    if relief is None:
+        relief = geo.relief_rho * rho
+    removed: list[int] = []
+    if len(faces) > max_faces or len(faces) < 5:
+        return removed
+    normals = np.asarray([f.normal for f in faces], dtype=float).reshape(-1, 3)
+    offsets = np.asarray([f.offset for f in faces], dtype=float)
+    pts = centres[[i for f in faces for i in f.contacts]] if len(centres) else centres
+    if len(pts) < 4:
+        return removed
+    bound = (pts.mean(axis=0), 3.0 * float(np.ptp(pts, axis=0).max()) + rho)
+    kept = list(range(len(faces)))
+    cos_cap = math.cos(math.radians(75.0))
+    while True:
+        best: int | None = None
+        order = sorted(
+            (k for k in kept if faces[k].source == "contacts" and faces[k].contacts),
+            key=lambda k: (faces[k].n_contacts, k),
+        )
+        for k in order:
+            others = [j for j in kept if j != k and supporting[j]]
+            if len(others) < 4:
+                continue
+            try:
+                poly = polyhedron_from_planes(normals[others], offsets[others], bound=bound)
+            except GeometryError:
+                continue  # the others do not close without it: a face
+            c = centres[list(faces[k].contacts)]
+            misfit = _signed_distance(c, poly.normals, poly.offsets) - rho
+            over = c @ poly.normals.T - poly.offsets
+            near = over >= -rho  # the planes each centre lies against (within ρ of the offset)
+            widths = np.asarray([face_width(poly, f) for f in range(len(poly.faces))])
+            if not near.any():
+                continue
+            against = np.flatnonzero(near.any(axis=0))
+            if float(widths[against].max()) < geo.edge_min_width * rho:
+                continue  # only narrow faces around: a curved object's facets stay
+            inset = np.zeros(len(c))
+            for i in range(len(c)):
+                at = np.flatnonzero(near[i])
+                if len(at) < 2:
+                    continue  # against one face: a flat face's touch, no rounding inset
+                mean = poly.normals[at].sum(axis=0)
+                mean /= max(float(np.linalg.norm(mean)), 1e-12)
+                cos_psi = max(float((poly.normals[at] @ mean).min()), cos_cap)
+                inset[i] = rounding * float(widths[at].min()) * (1.0 / cos_psi - 1.0)
+            slack = 3.0 * noise
+            if float(misfit.max()) <= relief + slack and bool((misfit >= -(inset + slack)).all()):
                 best = k
                 break
         if best is None:
