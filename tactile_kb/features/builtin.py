@@ -517,6 +517,8 @@ def surface_curved(
         )
         if sag > tol:
             return True
+    if _over_rounded(model) >= 2:
+        return True
     bent, folds = _spread_evidence(model, spread_deg)
     if bent:
         return True
@@ -533,6 +535,42 @@ def surface_curved(
         return int((c.max(axis=1) > cos_smooth).sum()) >= min_smooth_edges
     smooth = int((_edge_cosines(model, p) > cos_smooth).sum())
     return smooth + folds >= min_smooth_edges
+
+
+def _over_rounded(model: ObjectModel) -> int:
+    """How many tip centres lie further inside a convex model's polyhedron (offset by ρ) than
+    an edge rounded by ``geometry.edge_rounding`` of its faces' widths puts them
+    (:func:`tactile_kb.geometry.planes.rounding_insets`), by more than the relief
+    (twice ``geometry.relief_rho`` × ρ) and 3 σ of noise: touches of a surface curving between
+    the model's faces (a cylinder explored by a few facets), not of a polyhedron's rounded
+    edge. The touches of concave faces (inside the envelope by design) are not counted; 0
+    without a polyhedron."""
+    p = model.polyhedron
+    if p is None or not model.record.contacts:
+        return 0
+
+    def compute() -> int:
+        from tactile_kb.geometry.planes import contact_arrays, rounding_insets
+        from tactile_kb.geometry.polyhedron import face_width
+
+        assert p is not None
+        rho = model.record.tip_radius
+        widths = np.asarray([face_width(p, f) for f in range(len(p.faces))])
+        centres = contact_arrays(model.record.contacts)[0]
+        # not the touches of concave faces: they lie inside the envelope by design
+        concave = {
+            i
+            for f, s in zip(model.faces, model.supporting, strict=True)
+            if not s
+            for i in f.contacts
+        }
+        if concave:
+            centres = centres[[i for i in range(len(centres)) if i not in concave]]
+        inset, allowed = rounding_insets(p.normals, p.offsets, widths, centres, rho)
+        margin = 2.0 * current().geometry.relief_rho * rho + 3.0 * model.record.noise
+        return int((inset > allowed + margin).sum())
+
+    return _derived(model, (__name__, current().features, current().geometry, "rounded"), compute)
 
 
 @dataclass(frozen=True)
@@ -639,6 +677,27 @@ def spread_bend(
     ``features.bend_sigma_rho`` × ρ and the centres' scatter about the bent fit (relief):
     infinite when the centres cannot show a bend at all (on two lines along ``u``, fewer
     than five)."""
+    found = _bend(model, face, anywhere)
+    return None if found is None else (found[0], found[1])
+
+
+def _bend(model: ObjectModel, face: int, anywhere: bool) -> tuple[float, float, float] | None:
+    """:func:`spread_bend`'s ``(turn, sigma)`` and the largest turn (degrees) that surface
+    detail can fake: relief of height ``h`` under the contacts (``h`` the larger of
+    ``geometry.relief_rho`` × ρ and twice the centres' scatter about the bent fit) moves
+    each centre's height by at most ``h`` (outwards: by ``h/2`` about a plane ``h/2`` out),
+    so the fitted ``a`` by at most ``h/2 · Σ|q⊥ᵢ| / |q⊥|²``: a bound, not a standard
+    error, of what bumps and letters under a few contacts can do to a flat face."""
+
+    def compute() -> tuple[float, float, float] | None:
+        return _bend_of(model, face, anywhere)
+
+    return _derived(
+        model, (__name__, current().features, current().geometry, "bend", face, anywhere), compute
+    )
+
+
+def _bend_of(model: ObjectModel, face: int, anywhere: bool) -> tuple[float, float, float] | None:
     spreads = _face_spreads(model)
     if (
         not 0 <= face < len(spreads)
@@ -675,21 +734,21 @@ def spread_bend(
         if on.sum() >= (1.0 - MAX_REJECTED) * len(on):  # else the face itself bends away
             c = c[on]
     if len(c) < 5 or float(np.linalg.norm(u_dir)) < 1e-9:
-        return 0.0, math.inf
+        return 0.0, math.inf, 0.0
     u_dir /= np.linalg.norm(u_dir)
     v_dir = np.cross(n, u_dir)
     c = c - c.mean(axis=0)
     u, v, h = c @ u_dir, c @ v_dir, c @ n
     width = float(np.ptp(u))
     if width <= 0:
-        return 0.0, math.inf
+        return 0.0, math.inf, 0.0
     us, vs = u / width, v / width  # well-conditioned unknowns
     plane = np.column_stack([np.ones_like(us), us, vs])
     q = us * us
     q_perp = q - plane @ np.linalg.lstsq(plane, q, rcond=None)[0]
     norm2 = float(q_perp @ q_perp)
     if norm2 <= 1e-12:
-        return 0.0, math.inf
+        return 0.0, math.inf, 0.0
     a = float(q_perp @ h) / norm2  # metres per (u/W)²: h ≈ a·(u/W)² + plane
     design = np.column_stack([plane, q])
     rest = h - design @ np.linalg.lstsq(design, h, rcond=None)[0]
@@ -702,9 +761,13 @@ def spread_bend(
     # convex: over ``whole`` no face turns by more than whole/ρ (a steeper fit is the noise's)
     bound = whole / rho
     turn = max(-bound, min(bound, -2.0 * a / width * k))
+    # relief of height h under the contacts: heights uniform in [0, h], σ = h/√12, on top
+    # of the noise: two standard errors of the turn it makes
+    relief = current().geometry.relief_rho * rho / math.sqrt(12.0)
     return (
         math.degrees(turn),
         math.degrees(2.0 * sigma / (width * math.sqrt(norm2)) * k),
+        math.degrees(min(bound, 2.0 * 2.0 * relief / (width * math.sqrt(norm2)) * k)),
     )
 
 
@@ -713,7 +776,7 @@ def _mad(r: FloatArray) -> float:
     return 1.4826 * float(np.median(np.abs(r - np.median(r))))
 
 
-def _leans(turn: float, sigma: float, spread_deg: float) -> bool:
+def _leans(turn: float, sigma: float, spread_deg: float, relief: float = 0.0) -> bool:
     """A face whose turn the centres do not establish beyond ``spread_deg`` still counts as a
     gentle fold when they cannot measure it at all (``sigma`` infinite), or when their
     estimate itself reaches ``spread_deg`` (a small cylinder's narrow faces under 0.5 mm of
@@ -722,7 +785,7 @@ def _leans(turn: float, sigma: float, spread_deg: float) -> bool:
     face with relief (bumps, a scan's roughness under a few contacts) measures a turn of a
     few degrees with a standard error as large, and six such faces made a polyhedron
     curved."""
-    return math.isinf(sigma) or abs(turn) >= spread_deg
+    return math.isinf(sigma) or abs(turn) - relief >= spread_deg
 
 
 def _spread_evidence(model: ObjectModel, spread_deg: float) -> tuple[bool, int]:
@@ -743,17 +806,17 @@ def _spread_evidence(model: ObjectModel, spread_deg: float) -> tuple[bool, int]:
         for fi, s in enumerate(_face_spreads(model)):
             if s.angle <= spread_deg:
                 if s.any_angle > spread_deg:  # near its edges only: a fold at most
-                    found = spread_bend(model, fi, anywhere=True)
-                    if found is not None and _leans(*found, spread_deg):
+                    found = _bend(model, fi, True)
+                    if found is not None and _leans(found[0], found[1], spread_deg, found[2]):
                         folds += 1
                 continue
-            found = spread_bend(model, fi)
+            found = _bend(model, fi, False)
             if found is None:
                 continue
-            turn, sigma = found
-            if abs(turn) - 2.0 * sigma > spread_deg:
+            turn, sigma, relief = found
+            if abs(turn) - 2.0 * sigma - relief > spread_deg:
                 return True, folds  # measured: it turns by more than spread_deg
-            if _leans(turn, sigma, spread_deg):
+            if _leans(turn, sigma, spread_deg, relief):
                 folds += 1  # the centres cannot tell: the sensors' weak evidence
         return False, folds
 
