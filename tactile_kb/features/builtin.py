@@ -514,6 +514,8 @@ def surface_curved(
                 current().features.sagitta_fraction * extent,
                 4.0 * noise,
             )
+            # bumps and letters under a few contacts bend the fit by up to their height
+            + current().geometry.relief_rho * rho
         )
         if sag > tol:
             return True
