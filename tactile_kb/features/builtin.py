@@ -149,6 +149,9 @@ EDGE_SIGMAS = DEFAULTS.features.edge_sigmas
 lengths exceeds 4·√2·σ with a probability below 1 %."""
 POINT_TOL = DEFAULTS.features.point_tol
 HORIZONTAL_DEG = DEFAULTS.features.horizontal_deg
+RELIEF_DOF = 4.0
+"""Degrees of freedom the assumed relief (``geometry.relief_rho``) is worth when it is pooled
+with the scatter a face's tip centres show about their bent fit (:func:`spread_bend`)."""
 
 
 @dataclass(frozen=True)
@@ -679,27 +682,6 @@ def spread_bend(
     ``features.bend_sigma_rho`` × ρ and the centres' scatter about the bent fit (relief):
     infinite when the centres cannot show a bend at all (on two lines along ``u``, fewer
     than five)."""
-    found = _bend(model, face, anywhere)
-    return None if found is None else (found[0], found[1])
-
-
-def _bend(model: ObjectModel, face: int, anywhere: bool) -> tuple[float, float, float] | None:
-    """:func:`spread_bend`'s ``(turn, sigma)`` and the largest turn (degrees) that surface
-    detail can fake: relief of height ``h`` under the contacts (``h`` the larger of
-    ``geometry.relief_rho`` × ρ and twice the centres' scatter about the bent fit) moves
-    each centre's height by at most ``h`` (outwards: by ``h/2`` about a plane ``h/2`` out),
-    so the fitted ``a`` by at most ``h/2 · Σ|q⊥ᵢ| / |q⊥|²``: a bound, not a standard
-    error, of what bumps and letters under a few contacts can do to a flat face."""
-
-    def compute() -> tuple[float, float, float] | None:
-        return _bend_of(model, face, anywhere)
-
-    return _derived(
-        model, (__name__, current().features, current().geometry, "bend", face, anywhere), compute
-    )
-
-
-def _bend_of(model: ObjectModel, face: int, anywhere: bool) -> tuple[float, float, float] | None:
     spreads = _face_spreads(model)
     if (
         not 0 <= face < len(spreads)
@@ -736,26 +718,33 @@ def _bend_of(model: ObjectModel, face: int, anywhere: bool) -> tuple[float, floa
         if on.sum() >= (1.0 - MAX_REJECTED) * len(on):  # else the face itself bends away
             c = c[on]
     if len(c) < 5 or float(np.linalg.norm(u_dir)) < 1e-9:
-        return 0.0, math.inf, 0.0
+        return 0.0, math.inf
     u_dir /= np.linalg.norm(u_dir)
     v_dir = np.cross(n, u_dir)
     c = c - c.mean(axis=0)
     u, v, h = c @ u_dir, c @ v_dir, c @ n
     width = float(np.ptp(u))
     if width <= 0:
-        return 0.0, math.inf, 0.0
+        return 0.0, math.inf
     us, vs = u / width, v / width  # well-conditioned unknowns
     plane = np.column_stack([np.ones_like(us), us, vs])
     q = us * us
     q_perp = q - plane @ np.linalg.lstsq(plane, q, rcond=None)[0]
     norm2 = float(q_perp @ q_perp)
     if norm2 <= 1e-12:
-        return 0.0, math.inf, 0.0
+        return 0.0, math.inf
     a = float(q_perp @ h) / norm2  # metres per (u/W)²: h ≈ a·(u/W)² + plane
     design = np.column_stack([plane, q])
     rest = h - design @ np.linalg.lstsq(design, h, rcond=None)[0]
     scatter = math.sqrt(float(rest @ rest) / (len(h) - 4))  # about the bent fit: relief
-    sigma = max(floor, scatter)
+    # relief of height h (geometry.relief_rho × ρ) under the contacts, heights uniform in
+    # [0, h]: σ = h/√12, pooled with the measured scatter as a prior worth RELIEF_DOF
+    # degrees of freedom (a face touched a few times cannot show its own relief; one touched
+    # often shows it, whatever the prior says)
+    dof = len(h) - 4
+    prior = current().geometry.relief_rho * rho / math.sqrt(12.0)
+    pooled = math.sqrt((dof * scatter**2 + RELIEF_DOF * prior**2) / (dof + RELIEF_DOF))
+    sigma = max(floor, pooled)
     # κ = −2a/W², turned over the extent of all the face's contacts (its rounded edges too)
     whole = max(width, float(np.ptp(every @ u_dir)))
     k = whole / width
@@ -763,13 +752,9 @@ def _bend_of(model: ObjectModel, face: int, anywhere: bool) -> tuple[float, floa
     # convex: over ``whole`` no face turns by more than whole/ρ (a steeper fit is the noise's)
     bound = whole / rho
     turn = max(-bound, min(bound, -2.0 * a / width * k))
-    # relief of height h under the contacts: heights uniform in [0, h], σ = h/√12, on top
-    # of the noise: two standard errors of the turn it makes
-    relief = current().geometry.relief_rho * rho / math.sqrt(12.0)
     return (
         math.degrees(turn),
         math.degrees(2.0 * sigma / (width * math.sqrt(norm2)) * k),
-        math.degrees(min(bound, 2.0 * 2.0 * relief / (width * math.sqrt(norm2)) * k)),
     )
 
 
@@ -778,7 +763,7 @@ def _mad(r: FloatArray) -> float:
     return 1.4826 * float(np.median(np.abs(r - np.median(r))))
 
 
-def _leans(turn: float, sigma: float, spread_deg: float, relief: float = 0.0) -> bool:
+def _leans(turn: float, sigma: float, spread_deg: float) -> bool:
     """A face whose turn the centres do not establish beyond ``spread_deg`` still counts as a
     gentle fold when they cannot measure it at all (``sigma`` infinite), or when their
     estimate itself reaches ``spread_deg`` (a small cylinder's narrow faces under 0.5 mm of
@@ -787,7 +772,7 @@ def _leans(turn: float, sigma: float, spread_deg: float, relief: float = 0.0) ->
     face with relief (bumps, a scan's roughness under a few contacts) measures a turn of a
     few degrees with a standard error as large, and six such faces made a polyhedron
     curved."""
-    return math.isinf(sigma) or abs(turn) - relief >= spread_deg
+    return math.isinf(sigma) or abs(turn) >= spread_deg
 
 
 def _spread_evidence(model: ObjectModel, spread_deg: float) -> tuple[bool, int]:
@@ -808,17 +793,17 @@ def _spread_evidence(model: ObjectModel, spread_deg: float) -> tuple[bool, int]:
         for fi, s in enumerate(_face_spreads(model)):
             if s.angle <= spread_deg:
                 if s.any_angle > spread_deg:  # near its edges only: a fold at most
-                    found = _bend(model, fi, True)
-                    if found is not None and _leans(found[0], found[1], spread_deg, found[2]):
+                    found = spread_bend(model, fi, anywhere=True)
+                    if found is not None and _leans(*found, spread_deg):
                         folds += 1
                 continue
-            found = _bend(model, fi, False)
+            found = spread_bend(model, fi)
             if found is None:
                 continue
-            turn, sigma, relief = found
-            if abs(turn) - 2.0 * sigma - relief > spread_deg:
+            turn, sigma = found
+            if abs(turn) - 2.0 * sigma > spread_deg:
                 return True, folds  # measured: it turns by more than spread_deg
-            if _leans(turn, sigma, spread_deg, relief):
+            if _leans(turn, sigma, spread_deg):
                 folds += 1  # the centres cannot tell: the sensors' weak evidence
         return False, folds
 
