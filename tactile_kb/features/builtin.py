@@ -539,7 +539,9 @@ def surface_curved(
         np.fill_diagonal(c, -1.0)
         return int((c.max(axis=1) > cos_smooth).sum()) >= min_smooth_edges
     smooth = int((_edge_cosines(model, p) > cos_smooth).sum())
-    return smooth + folds >= min_smooth_edges
+    # a fold is a smooth edge's worth of evidence only beside smooth edges: folds alone are
+    # faces the centres could not measure (few touches, relief), not a curved surface
+    return smooth + min(folds, smooth) >= min_smooth_edges
 
 
 def _over_rounded(model: ObjectModel) -> int:
@@ -626,7 +628,8 @@ def _face_spreads(model: ObjectModel) -> list[_Spread]:
             inside = (edge_dist[:, None] > band) & (edge_dist[None, :] > band)
             own = edge_dist > rho * np.sin(np.radians(ang.max(axis=1))) + rounding
             interior = tuple(int(face.contacts[k]) for k in np.flatnonzero(own))
-            on_face = tuple(int(face.contacts[k]) for k in np.flatnonzero(edge_dist > 0.0))
+            # feet inside the polygon, beyond the band a rounded edge covers
+            on_face = tuple(int(face.contacts[k]) for k in np.flatnonzero(edge_dist > rounding))
             e, f = np.unravel_index(int(np.argmax(ang)), ang.shape)
             anywhere = (float(ang[e, f]), (int(face.contacts[e]), int(face.contacts[f])))
             if not inside.any():
@@ -801,7 +804,9 @@ def _spread_evidence(model: ObjectModel, spread_deg: float) -> tuple[bool, int]:
             if found is None:
                 continue
             turn, sigma = found
-            if abs(turn) - 2.0 * sigma > spread_deg:
+            # a convex object's surface, and the tip centres' offset of it, only turn
+            # outwards: a concave turn measured on it is relief or a mix of two faces
+            if (turn if model.convex else abs(turn)) - 2.0 * sigma > spread_deg:
                 return True, folds  # measured: it turns by more than spread_deg
             if _leans(turn, sigma, spread_deg):
                 folds += 1  # the centres cannot tell: the sensors' weak evidence

@@ -1018,6 +1018,11 @@ def explained_faces(
             inset = np.zeros(len(c))
             for i in range(len(c)):
                 at = np.flatnonzero(near[i])
+                if not supporting[k] and len(at):
+                    # a plane the touched object reaches beyond is no face of a convex
+                    # object: a rounding as deep as any edge's of these faces explains it
+                    inset[i] = rounding * float(widths[at].min())
+                    continue
                 if len(at) < 2:
                     continue  # against one face: a flat face's touch, no rounding inset
                 mean = poly.normals[at].sum(axis=0)
