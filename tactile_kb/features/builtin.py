@@ -628,8 +628,7 @@ def _face_spreads(model: ObjectModel) -> list[_Spread]:
             inside = (edge_dist[:, None] > band) & (edge_dist[None, :] > band)
             own = edge_dist > rho * np.sin(np.radians(ang.max(axis=1))) + rounding
             interior = tuple(int(face.contacts[k]) for k in np.flatnonzero(own))
-            # feet inside the polygon, beyond the band a rounded edge covers
-            on_face = tuple(int(face.contacts[k]) for k in np.flatnonzero(edge_dist > rounding))
+            on_face = tuple(int(face.contacts[k]) for k in np.flatnonzero(edge_dist > 0.0))
             e, f = np.unravel_index(int(np.argmax(ang)), ang.shape)
             anywhere = (float(ang[e, f]), (int(face.contacts[e]), int(face.contacts[f])))
             if not inside.any():
@@ -747,7 +746,7 @@ def spread_bend(
     dof = len(h) - 4
     prior = current().geometry.relief_rho * rho / math.sqrt(12.0)
     pooled = math.sqrt((dof * scatter**2 + RELIEF_DOF * prior**2) / (dof + RELIEF_DOF))
-    sigma = max(floor, pooled)
+    sigma = max(floor, scatter, pooled)
     # κ = −2a/W², turned over the extent of all the face's contacts (its rounded edges too)
     whole = max(width, float(np.ptp(every @ u_dir)))
     k = whole / width
