@@ -1020,8 +1020,9 @@ def explained_faces(
                 at = np.flatnonzero(near[i])
                 if not supporting[k] and len(at):
                     # a plane the touched object reaches beyond is no face of a convex
-                    # object: a rounding as deep as any edge's of these faces explains it
-                    inset[i] = rounding * float(widths[at].min())
+                    # object: a rounding as deep as any edge's of these faces explains it,
+                    # up to the tip's own radius
+                    inset[i] = min(rounding * float(widths[at].min()), rho)
                     continue
                 if len(at) < 2:
                     continue  # against one face: a flat face's touch, no rounding inset
