@@ -61,6 +61,7 @@ __all__ = [
     "DEFAULT_MERGE_DEG",
     "DEFAULT_SPAN",
     "DEFAULT_SPLIT_TOL",
+    "DETAIL_SIGMAS",
     "EDGE_MIN_WIDTH",
     "EDGE_ROUNDING",
     "EDGE_SIGMAS",
@@ -127,6 +128,10 @@ OUTSIDE_SIGMAS = 4.0
 """A tip centre further outside a face's robustly fitted plane than this many times the fit's
 scale touched relief on it (a plane's centres lie on it, within the noise)."""
 
+
+DETAIL_SIGMAS = 4.0
+"""A touch of relief lies up to this many times the faces' median scatter (RMS of their tip
+centres about their planes) further out than the relief height (:func:`explained_faces`)."""
 
 _ROUGH_MIN = 6
 """Faces with at least this many contacts show the surface's detail in their centres' scatter
@@ -991,6 +996,10 @@ def explained_faces(
     bound = (pts.mean(axis=0), 3.0 * float(np.ptp(pts, axis=0).max()) + rho)
     kept = list(range(len(faces)))
     cos_cap = math.cos(math.radians(75.0))
+    # the surface's detail as the faces measure it: the median scatter of the tip centres of
+    # the faces that span a plane about it (a scan's noise lifts a tip by a few times that)
+    scatter = [f.residual for f in faces if f.refined and f.n_contacts >= 6]
+    detail = DETAIL_SIGMAS * float(np.median(scatter)) if scatter else 0.0
     while True:
         best: int | None = None
         order = sorted(
@@ -1031,7 +1040,7 @@ def explained_faces(
                 cos_psi = max(float((poly.normals[at] @ mean).min()), cos_cap)
                 inset[i] = rounding * float(widths[at].min()) * (1.0 / cos_psi - 1.0)
             slack = 3.0 * noise
-            if float(misfit.max()) <= relief + slack and bool((misfit >= -(inset + slack)).all()):
+            if float(misfit.max()) <= relief + detail + slack and bool((misfit >= -(inset + slack)).all()):
                 best = k
                 break
         if best is None:
