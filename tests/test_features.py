@@ -587,9 +587,7 @@ def test_a_spread_the_centres_cannot_test_counts_as_a_gentle_fold() -> None:
     curved = get_feature("surface_curved").fn
     assert not curved(lines)  # one fold is no curved surface
     assert _spread_evidence(lines, 10.0) == (False, 1)  # it is a fold
-    # but a fold counts only beside smooth edges: alone, it is a face the centres could
-    # not measure (a few touches on relief), and a box has no smooth edge
-    assert not curved(lines, min_smooth_edges=1)
+    assert curved(lines, min_smooth_edges=1)  # it counts as a smooth edge
 
 
 def test_curvature_is_measured_over_the_face() -> None:

@@ -539,9 +539,7 @@ def surface_curved(
         np.fill_diagonal(c, -1.0)
         return int((c.max(axis=1) > cos_smooth).sum()) >= min_smooth_edges
     smooth = int((_edge_cosines(model, p) > cos_smooth).sum())
-    # a fold is a smooth edge's worth of evidence only beside smooth edges: folds alone are
-    # faces the centres could not measure (few touches, relief), not a curved surface
-    return smooth + min(folds, smooth) >= min_smooth_edges
+    return smooth + folds >= min_smooth_edges
 
 
 def _over_rounded(model: ObjectModel) -> int:
@@ -768,13 +766,13 @@ def _mad(r: FloatArray) -> float:
 def _leans(turn: float, sigma: float, spread_deg: float) -> bool:
     """A face whose turn the centres do not establish beyond ``spread_deg`` still counts as a
     gentle fold when they cannot measure it at all (``sigma`` infinite), or when their
-    estimate itself reaches ``spread_deg`` (a small cylinder's narrow faces under 0.5 mm of
-    noise: too uncertain to establish their turn, but they lean to it). An estimate below
-    ``spread_deg`` that is merely within two standard errors of it is no evidence: a flat
-    face with relief (bumps, a scan's roughness under a few contacts) measures a turn of a
-    few degrees with a standard error as large, and six such faces made a polyhedron
-    curved."""
-    return math.isinf(sigma) or abs(turn) >= spread_deg
+    estimate itself reaches ``spread_deg`` and one standard error, outwards (``turn`` is the
+    outward turn: a small cylinder's narrow faces under 0.5 mm of noise are too uncertain to
+    establish their turn, but they lean to it). An estimate below ``spread_deg``, or below
+    its own standard error, is no evidence: a flat face with relief (bumps, a scan's
+    roughness under a few contacts) measures a turn of a few degrees, or tens with few
+    touches, with a standard error as large, and six such faces made a polyhedron curved."""
+    return math.isinf(sigma) or turn >= max(spread_deg, sigma)
 
 
 def _spread_evidence(model: ObjectModel, spread_deg: float) -> tuple[bool, int]:
@@ -790,24 +788,27 @@ def _spread_evidence(model: ObjectModel, spread_deg: float) -> tuple[bool, int]:
     sensors that far apart only near its edges: a small cylinder's faces are too narrow to
     have an inside, a box's are measured flat."""
 
+    def outward(turn: float) -> float:
+        # a convex object's surface, and the tip centres' offset of it, only turn outwards:
+        # an inward turn measured on it is relief or a mix of two faces
+        return turn if model.convex else abs(turn)
+
     def compute() -> tuple[bool, int]:
         folds = 0
         for fi, s in enumerate(_face_spreads(model)):
             if s.angle <= spread_deg:
                 if s.any_angle > spread_deg:  # near its edges only: a fold at most
                     found = spread_bend(model, fi, anywhere=True)
-                    if found is not None and _leans(*found, spread_deg):
+                    if found is not None and _leans(outward(found[0]), found[1], spread_deg):
                         folds += 1
                 continue
             found = spread_bend(model, fi)
             if found is None:
                 continue
             turn, sigma = found
-            # a convex object's surface, and the tip centres' offset of it, only turn
-            # outwards: a concave turn measured on it is relief or a mix of two faces
-            if (turn if model.convex else abs(turn)) - 2.0 * sigma > spread_deg:
+            if outward(turn) - 2.0 * sigma > spread_deg:
                 return True, folds  # measured: it turns by more than spread_deg
-            if _leans(turn, sigma, spread_deg):
+            if _leans(outward(turn), sigma, spread_deg):
                 folds += 1  # the centres cannot tell: the sensors' weak evidence
         return False, folds
 
