@@ -9,8 +9,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 import trimesh
-
 from scanlike import bumped, rounded_box
+
 from tactile_kb.features.builtin import surface_curved
 from tactile_kb.geometry.model import build_model
 from tactile_kb.geometry.planes import explained_faces, rounding_insets
@@ -106,4 +106,5 @@ def test_rounding_insets_of_a_rounded_edge_within_allowance() -> None:
     # in the middle of a face: no inset, nothing allowed
     mid = np.array([[half + RHO, 0.0, 0.025]])
     inset, allowed = rounding_insets(normals, offsets, widths, mid, RHO, rounding=0.1)
-    assert abs(inset[0]) < 1e-12 and allowed[0] == 0.0
+    assert abs(inset[0]) < 1e-12
+    assert allowed[0] == 0.0

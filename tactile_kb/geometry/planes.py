@@ -1040,7 +1040,9 @@ def explained_faces(
                 cos_psi = max(float((poly.normals[at] @ mean).min()), cos_cap)
                 inset[i] = rounding * float(widths[at].min()) * (1.0 / cos_psi - 1.0)
             slack = 3.0 * noise
-            if float(misfit.max()) <= relief + detail + slack and bool((misfit >= -(inset + detail + slack)).all()):
+            if float(misfit.max()) <= relief + detail + slack and bool(
+                (misfit >= -(inset + detail + slack)).all()
+            ):
                 best = k
                 break
         if best is None:
