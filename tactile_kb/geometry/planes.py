@@ -948,17 +948,22 @@ def explained_faces(
     For each centre the *misfit* ``e = dist(c, P) − ρ`` is measured (positive outside). The
     face is explained when every one of its centres has
 
-    * ``e ≤ relief + 3σ`` (bumps and relief lift a centre by at most their height), and
-    * ``e ≥ −(r·(1/cos θ − 1) + 3σ)``: a tip on an edge rounded with radius ``r`` whose
-      surface normal there has turned by θ from a face's is at most that far inside the
-      ρ-offset of the sharp edge. ``r`` is ``rounding`` × the width of the narrowest face of
-      ``P`` the centres lie against (within ρ of its offset plane), θ the largest angle between
-      the candidate's normal and those faces' (at most 80°).
+    * ``e ≤ relief + detail + 3σ`` (bumps and relief lift a centre by at most their height,
+      a scan's roughness by a few times the scatter the faces show), and
+    * ``e ≥ −(inset + detail + 3σ)``: a tip on an edge rounded with radius ``r``, against
+      faces of ``P`` (within ρ of their planes) whose normals' mean is at most ψ from each
+      (at most 75°), lies up to ``inset = r·(1/cos ψ − 1)`` inside the sharp edge's ρ-offset
+      (``r(√2 − 1)`` at a box's edge), ``r`` being ``rounding`` × the width of the narrowest
+      of those faces; against one face the inset is 0. A face the touched object reaches
+      beyond (not supporting: no face of a convex object) may be inset by ``rounding`` ×
+      that width, at most ρ.
 
-    σ is the declared noise. Faces are examined fewest contacts first and removed one at a
-    time while the others still close; the table is never removed, and faces are only
-    looked for against faces at least ``geometry.edge_min_width`` tip radii wide (next to
-    narrow faces only, as on a curved object, every face stays).
+    σ is the declared noise; ``detail`` is :data:`DETAIL_SIGMAS` × the median RMS scatter of
+    the tip centres of the faces of six or more contacts about their planes. Faces are
+    examined fewest contacts first and removed one at a time while the others still close;
+    the table is never removed, and faces are only looked for against faces at least
+    ``geometry.edge_min_width`` tip radii wide (next to narrow faces only, as on a curved
+    object, every face stays).
 
     Parameters
     ----------
