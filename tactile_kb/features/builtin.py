@@ -766,13 +766,13 @@ def _mad(r: FloatArray) -> float:
 def _leans(turn: float, sigma: float, spread_deg: float) -> bool:
     """A face whose turn the centres do not establish beyond ``spread_deg`` still counts as a
     gentle fold when they cannot measure it at all (``sigma`` infinite), or when their
-    estimate itself reaches ``spread_deg`` and one standard error, outwards (``turn`` is the
-    outward turn: a small cylinder's narrow faces under 0.5 mm of noise are too uncertain to
-    establish their turn, but they lean to it). An estimate below ``spread_deg``, or below
-    its own standard error, is no evidence: a flat face with relief (bumps, a scan's
+    estimate itself reaches ``spread_deg`` and half its standard error (a small cylinder's
+    narrow faces under 0.5 mm of noise are too uncertain to establish their turn, but they
+    lean to it). An estimate below ``spread_deg``, or below half its own standard error, is
+    no evidence: a flat face with relief (bumps, a scan's
     roughness under a few contacts) measures a turn of a few degrees, or tens with few
     touches, with a standard error as large, and six such faces made a polyhedron curved."""
-    return math.isinf(sigma) or turn >= max(spread_deg, sigma)
+    return math.isinf(sigma) or abs(turn) >= max(spread_deg, 0.5 * sigma)
 
 
 def _spread_evidence(model: ObjectModel, spread_deg: float) -> tuple[bool, int]:
@@ -799,7 +799,7 @@ def _spread_evidence(model: ObjectModel, spread_deg: float) -> tuple[bool, int]:
             if s.angle <= spread_deg:
                 if s.any_angle > spread_deg:  # near its edges only: a fold at most
                     found = spread_bend(model, fi, anywhere=True)
-                    if found is not None and _leans(outward(found[0]), found[1], spread_deg):
+                    if found is not None and _leans(*found, spread_deg):
                         folds += 1
                 continue
             found = spread_bend(model, fi)
@@ -808,7 +808,7 @@ def _spread_evidence(model: ObjectModel, spread_deg: float) -> tuple[bool, int]:
             turn, sigma = found
             if outward(turn) - 2.0 * sigma > spread_deg:
                 return True, folds  # measured: it turns by more than spread_deg
-            if _leans(outward(turn), sigma, spread_deg):
+            if _leans(turn, sigma, spread_deg):
                 folds += 1  # the centres cannot tell: the sensors' weak evidence
         return False, folds
 

@@ -959,7 +959,8 @@ def explained_faces(
       that width, at most ρ.
 
     σ is the declared noise; ``detail`` is :data:`DETAIL_SIGMAS` × the median RMS scatter of
-    the tip centres of the faces of six or more contacts about their planes. Faces are
+    the tip centres of the faces of six or more contacts about their planes, less the
+    declared noise (in quadrature). Faces are
     examined fewest contacts first and removed one at a time while the others still close;
     the table is never removed, and faces are only looked for against faces at least
     ``geometry.edge_min_width`` tip radii wide (next to narrow faces only, as on a curved
@@ -1003,8 +1004,10 @@ def explained_faces(
     cos_cap = math.cos(math.radians(75.0))
     # the surface's detail as the faces measure it: the median scatter of the tip centres of
     # the faces that span a plane about it (a scan's noise lifts a tip by a few times that)
+    # (beyond the declared noise, which the slack below covers)
     scatter = [f.residual for f in faces if f.refined and f.n_contacts >= 6]
-    detail = DETAIL_SIGMAS * float(np.median(scatter)) if scatter else 0.0
+    rough = float(np.median(scatter)) if scatter else 0.0
+    detail = DETAIL_SIGMAS * math.sqrt(max(rough * rough - noise * noise, 0.0))
     while True:
         best: int | None = None
         order = sorted(
