@@ -999,7 +999,10 @@ def explained_faces(
     pts = centres[[i for f in faces for i in f.contacts]] if len(centres) else centres
     if len(pts) < 4:
         return removed
-    bound = (pts.mean(axis=0), 3.0 * float(np.ptp(pts, axis=0).max()) + rho)
+    # the others must close where the model's polyhedron must (three times the touched
+    # points' radius about their centre, as :func:`tactile_kb.geometry.model.build_model`)
+    centre = pts.mean(axis=0)
+    bound = (centre, 3.0 * float(np.linalg.norm(pts - centre, axis=1).max()))
     kept = list(range(len(faces)))
     cos_cap = math.cos(math.radians(75.0))
     # the surface's detail as the faces measure it: the median scatter of the tip centres of
