@@ -522,8 +522,6 @@ def surface_curved(
         )
         if sag > tol:
             return True
-    if _over_rounded(model) >= 2:
-        return True
     bent, folds = _spread_evidence(model, spread_deg)
     if bent:
         return True
@@ -540,42 +538,6 @@ def surface_curved(
         return int((c.max(axis=1) > cos_smooth).sum()) >= min_smooth_edges
     smooth = int((_edge_cosines(model, p) > cos_smooth).sum())
     return smooth + folds >= min_smooth_edges
-
-
-def _over_rounded(model: ObjectModel) -> int:
-    """How many tip centres lie further inside a convex model's polyhedron (offset by ρ) than
-    an edge rounded by ``geometry.edge_rounding`` of its faces' widths puts them
-    (:func:`tactile_kb.geometry.planes.rounding_insets`), by more than the relief
-    (twice ``geometry.relief_rho`` × ρ) and 3 σ of noise: touches of a surface curving between
-    the model's faces (a cylinder explored by a few facets), not of a polyhedron's rounded
-    edge. The touches of concave faces (inside the envelope by design) are not counted; 0
-    without a polyhedron."""
-    p = model.polyhedron
-    if p is None or not model.record.contacts:
-        return 0
-
-    def compute() -> int:
-        from tactile_kb.geometry.planes import contact_arrays, rounding_insets
-        from tactile_kb.geometry.polyhedron import face_width
-
-        assert p is not None
-        rho = model.record.tip_radius
-        widths = np.asarray([face_width(p, f) for f in range(len(p.faces))])
-        centres = contact_arrays(model.record.contacts)[0]
-        # not the touches of concave faces: they lie inside the envelope by design
-        concave = {
-            i
-            for f, s in zip(model.faces, model.supporting, strict=True)
-            if not s
-            for i in f.contacts
-        }
-        if concave:
-            centres = centres[[i for i in range(len(centres)) if i not in concave]]
-        inset, allowed = rounding_insets(p.normals, p.offsets, widths, centres, rho)
-        margin = 2.0 * current().geometry.relief_rho * rho + 3.0 * model.record.noise
-        return int((inset > allowed + margin).sum())
-
-    return _derived(model, (__name__, current().features, current().geometry, "rounded"), compute)
 
 
 @dataclass(frozen=True)

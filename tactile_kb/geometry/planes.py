@@ -68,6 +68,7 @@ __all__ = [
     "INSIDE_SIGMAS",
     "MAX_REJECTED",
     "OUTSIDE_SIGMAS",
+    "SMOOTH_RHO",
     "TABLE_TOL",
     "Face",
     "contact_arrays",
@@ -924,6 +925,13 @@ def _signed_distance(x: FloatArray, normals: FloatArray, offsets: FloatArray) ->
     return np.asarray(np.where(inside, over.max(axis=1), np.linalg.norm(x - q, axis=1)))
 
 
+SMOOTH_RHO = 0.01
+"""Tip radii: a surface whose faces scatter by no more than this beyond the declared noise
+(the median RMS of the faces touched six or more times) shows no scan detail, and
+:func:`explained_faces` explains none of its faces away: an ideal solid's narrow faces and
+edge touches are left to :func:`edge_faces`."""
+
+
 def explained_faces(
     faces: Sequence[Face],
     supporting: Sequence[bool],
@@ -1010,7 +1018,10 @@ def explained_faces(
     # (beyond the declared noise, which the slack below covers)
     scatter = [f.residual for f in faces if f.refined and f.n_contacts >= 6]
     rough = float(np.median(scatter)) if scatter else 0.0
-    detail = DETAIL_SIGMAS * math.sqrt(max(rough * rough - noise * noise, 0.0))
+    excess = math.sqrt(max(rough * rough - noise * noise, 0.0))
+    if excess <= SMOOTH_RHO * rho:
+        return removed  # a surface with no detail beyond the noise: no rounding, no relief
+    detail = DETAIL_SIGMAS * excess
     while True:
         best: int | None = None
         order = sorted(
@@ -1018,6 +1029,8 @@ def explained_faces(
             key=lambda k: (faces[k].n_contacts, k),
         )
         for k in order:
+            if not supporting[k] and faces[k].refined:
+                continue  # a concave face explored as a plane (a U-block's hollow): a face
             others = [j for j in kept if j != k and supporting[j]]
             if len(others) < 4:
                 continue
