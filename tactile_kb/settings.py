@@ -278,6 +278,14 @@ class GeometrySettings(_Group):
         ge=0,
         description="An edge face's penetration is allowed this many σ/√m of noise on top.",
     )
+    relief_rho: float = Field(
+        0.2,
+        ge=0,
+        description="Tip radii: the largest surface detail that is not shape (bumps, ripples, "
+        "printed or embossed relief: 1 mm for the 5 mm tip). A face's tip centres may lie this "
+        "far outside its plane, and a face's bending or turn is curvature only beyond what "
+        "relief this high under its contacts can produce.",
+    )
     merge_fraction: float = Field(
         0.03,
         gt=0,

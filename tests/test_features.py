@@ -14,11 +14,12 @@ import numpy as np
 import pytest
 import trimesh
 
-from tactile_kb import solids
+from tactile_kb import settings, solids
 from tactile_kb.errors import GeometryError, PluginError, UsageError
 from tactile_kb.features.builtin import (
     BUILTIN_FEATURES,
     Feature,
+    _spread_evidence,
     available_features,
     check_binding,
     edge_uncertainties,
@@ -451,9 +452,11 @@ def test_a_neighbouring_sensor_does_not_make_a_plane_face_curved() -> None:
     inside, at_edge = at(middle), at(near_edge)
     assert not get_feature("surface_curved").fn(model)
     assert interior_spread_deg(inside) == pytest.approx(12.0, abs=0.5)
-    turn, sigma = spread_bend(inside, fi)
+    turn, _ = spread_bend(inside, fi)
     assert abs(turn) < 1e-6
-    assert 3 * sigma < 10.0  # the centres can tell a 10° turn from none
+    with settings.override(geometry={"relief_rho": 0.0}):  # a surface without relief
+        assert 3 * spread_bend(build_model(inside.record), fi)[1] < 10.0  # 10° measurable
+    # with relief of a millimetre under eight touches, a 10° turn is not: never curved
     assert not get_feature("surface_curved").fn(inside)
     assert interior_spread_deg(at_edge) == 0.0
     assert not get_feature("surface_curved").fn(at_edge)
@@ -505,11 +508,12 @@ def test_a_face_whose_tip_centres_turn_is_curved() -> None:
     fi = int(np.argmax(bent.polyhedron.normals[:, 2]))
     truth = _face_turn(bent, fi, 0.12)
     assert truth > 15.0
-    turn, sigma = spread_bend(bent, fi)
+    turn, _ = spread_bend(bent, fi)
     # measured over the centres on the face's plane (the outermost, bent furthest away, may
     # be left out as touches beside it): a good part of the true turn, never more
     assert 0.6 * truth < turn < 1.2 * truth
-    assert 3 * sigma < 10.0  # a turn of 10° is measurable: the centres decide
+    with settings.override(geometry={"relief_rho": 0.0}):  # a surface without relief
+        assert 3 * spread_bend(build_model(bent.record), fi)[1] < 10.0  # 10° measurable
     assert get_feature("surface_curved").fn(bent)
 
 
@@ -582,6 +586,7 @@ def test_a_spread_the_centres_cannot_test_counts_as_a_gentle_fold() -> None:
     assert spread_bend(lines, fi)[1] == math.inf
     curved = get_feature("surface_curved").fn
     assert not curved(lines)  # one fold is no curved surface
+    assert _spread_evidence(lines, 10.0) == (False, 1)  # it is a fold
     assert curved(lines, min_smooth_edges=1)  # it counts as a smooth edge
 
 

@@ -54,6 +54,7 @@ DOCUMENTED: dict[str, dict[str, float | str]] = {
         "edge_rounding": 0.10,
         "edge_min_width": 4.0,
         "edge_sigmas": 2.0,
+        "relief_rho": 0.2,
         "merge_fraction": 0.03,
         "noisy_merge_fraction": 0.05,
         "collapse_sigmas": 4.0,

@@ -149,6 +149,9 @@ EDGE_SIGMAS = DEFAULTS.features.edge_sigmas
 lengths exceeds 4·√2·σ with a probability below 1 %."""
 POINT_TOL = DEFAULTS.features.point_tol
 HORIZONTAL_DEG = DEFAULTS.features.horizontal_deg
+RELIEF_DOF = 4.0
+"""Degrees of freedom the assumed relief (``geometry.relief_rho``) is worth when it is pooled
+with the scatter a face's tip centres show about their bent fit (:func:`spread_bend`)."""
 
 
 @dataclass(frozen=True)
@@ -514,6 +517,8 @@ def surface_curved(
                 current().features.sagitta_fraction * extent,
                 4.0 * noise,
             )
+            # bumps and letters under a few contacts bend the fit by up to their height
+            + current().geometry.relief_rho * rho
         )
         if sag > tol:
             return True
@@ -694,7 +699,14 @@ def spread_bend(
     design = np.column_stack([plane, q])
     rest = h - design @ np.linalg.lstsq(design, h, rcond=None)[0]
     scatter = math.sqrt(float(rest @ rest) / (len(h) - 4))  # about the bent fit: relief
-    sigma = max(floor, scatter)
+    # relief of height h (geometry.relief_rho × ρ) under the contacts, heights uniform in
+    # [0, h]: σ = h/√12, pooled with the measured scatter as a prior worth RELIEF_DOF
+    # degrees of freedom (a face touched a few times cannot show its own relief; one touched
+    # often shows it, whatever the prior says)
+    dof = len(h) - 4
+    prior = current().geometry.relief_rho * rho / math.sqrt(12.0)
+    pooled = math.sqrt((dof * scatter**2 + RELIEF_DOF * prior**2) / (dof + RELIEF_DOF))
+    sigma = max(floor, scatter, pooled)
     # κ = −2a/W², turned over the extent of all the face's contacts (its rounded edges too)
     whole = max(width, float(np.ptp(every @ u_dir)))
     k = whole / width
@@ -716,13 +728,13 @@ def _mad(r: FloatArray) -> float:
 def _leans(turn: float, sigma: float, spread_deg: float) -> bool:
     """A face whose turn the centres do not establish beyond ``spread_deg`` still counts as a
     gentle fold when they cannot measure it at all (``sigma`` infinite), or when their
-    estimate itself reaches ``spread_deg`` (a small cylinder's narrow faces under 0.5 mm of
-    noise: too uncertain to establish their turn, but they lean to it). An estimate below
-    ``spread_deg`` that is merely within two standard errors of it is no evidence: a flat
-    face with relief (bumps, a scan's roughness under a few contacts) measures a turn of a
-    few degrees with a standard error as large, and six such faces made a polyhedron
-    curved."""
-    return math.isinf(sigma) or abs(turn) >= spread_deg
+    estimate itself reaches ``spread_deg`` and half its standard error (a small cylinder's
+    narrow faces under 0.5 mm of noise are too uncertain to establish their turn, but they
+    lean to it). An estimate below ``spread_deg``, or below half its own standard error, is
+    no evidence: a flat face with relief (bumps, a scan's
+    roughness under a few contacts) measures a turn of a few degrees, or tens with few
+    touches, with a standard error as large, and six such faces made a polyhedron curved."""
+    return math.isinf(sigma) or abs(turn) >= max(spread_deg, 0.5 * sigma)
 
 
 def _spread_evidence(model: ObjectModel, spread_deg: float) -> tuple[bool, int]:
@@ -738,6 +750,11 @@ def _spread_evidence(model: ObjectModel, spread_deg: float) -> tuple[bool, int]:
     sensors that far apart only near its edges: a small cylinder's faces are too narrow to
     have an inside, a box's are measured flat."""
 
+    def outward(turn: float) -> float:
+        # a convex object's surface, and the tip centres' offset of it, only turn outwards:
+        # an inward turn measured on it is relief or a mix of two faces
+        return turn if model.convex else abs(turn)
+
     def compute() -> tuple[bool, int]:
         folds = 0
         for fi, s in enumerate(_face_spreads(model)):
@@ -751,7 +768,7 @@ def _spread_evidence(model: ObjectModel, spread_deg: float) -> tuple[bool, int]:
             if found is None:
                 continue
             turn, sigma = found
-            if abs(turn) - 2.0 * sigma > spread_deg:
+            if outward(turn) - 2.0 * sigma > spread_deg:
                 return True, folds  # measured: it turns by more than spread_deg
             if _leans(turn, sigma, spread_deg):
                 folds += 1  # the centres cannot tell: the sensors' weak evidence

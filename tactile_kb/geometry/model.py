@@ -50,6 +50,7 @@ from tactile_kb.geometry.planes import (
     Face,
     contact_arrays,
     edge_faces,
+    explained_faces,
     merge_plane_arrays,
     nearest_points,
 )
@@ -233,6 +234,18 @@ def build_model(
         drop = _far_from_edges(faces, drop, arrays[0], record.tip_radius, noise, edge_rounding)
         if drop:
             edge_contacts = tuple(sorted(i for k in drop for i in faces[k].contacts))
+            faces = tuple(f for k, f in enumerate(faces) if k not in drop)
+            points, normals, offsets, supporting = _support(
+                arrays[0], record.tip_radius, faces, tol
+            )
+    if edge_rounding is not None and len(faces) >= 5:
+        drop = explained_faces(
+            faces, supporting, arrays[0], record.tip_radius, noise=noise, rounding=edge_rounding
+        )
+        if drop:
+            edge_contacts = tuple(
+                sorted((*edge_contacts, *(i for k in drop for i in faces[k].contacts)))
+            )
             faces = tuple(f for k, f in enumerate(faces) if k not in drop)
             points, normals, offsets, supporting = _support(
                 arrays[0], record.tip_radius, faces, tol

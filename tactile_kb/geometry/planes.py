@@ -61,21 +61,25 @@ __all__ = [
     "DEFAULT_MERGE_DEG",
     "DEFAULT_SPAN",
     "DEFAULT_SPLIT_TOL",
+    "DETAIL_SIGMAS",
     "EDGE_MIN_WIDTH",
     "EDGE_ROUNDING",
     "EDGE_SIGMAS",
     "INSIDE_SIGMAS",
     "MAX_REJECTED",
     "OUTSIDE_SIGMAS",
+    "SMOOTH_RHO",
     "TABLE_TOL",
     "Face",
     "contact_arrays",
     "cut_angle",
     "edge_faces",
+    "explained_faces",
     "fit_face",
     "merge_plane_arrays",
     "merge_planes",
     "nearest_points",
+    "rounding_insets",
 ]
 
 
@@ -125,6 +129,10 @@ OUTSIDE_SIGMAS = 4.0
 """A tip centre further outside a face's robustly fitted plane than this many times the fit's
 scale touched relief on it (a plane's centres lie on it, within the noise)."""
 
+
+DETAIL_SIGMAS = 4.0
+"""A touch of relief lies up to this many times the faces' median scatter (RMS of their tip
+centres about their planes) further out than the relief height (:func:`explained_faces`)."""
 
 _ROUGH_MIN = 6
 """Faces with at least this many contacts show the surface's detail in their centres' scatter
@@ -906,3 +914,200 @@ def edge_faces(
             return sorted(removed)
         kept.remove(best)
         removed.append(best)
+
+
+def _signed_distance(x: FloatArray, normals: FloatArray, offsets: FloatArray) -> FloatArray:
+    """Signed distance of each row of ``x`` to the convex set ``normals · q ≤ offsets``:
+    positive outside (to its nearest point), negative inside (to its nearest plane)."""
+    over = x @ normals.T - offsets
+    inside = over.max(axis=1) <= 0
+    q = nearest_points(x, normals, offsets)
+    return np.asarray(np.where(inside, over.max(axis=1), np.linalg.norm(x - q, axis=1)))
+
+
+SMOOTH_RHO = 0.01
+"""Tip radii: a surface whose faces scatter by no more than this beyond the declared noise
+(the median RMS of the faces touched six or more times) shows no scan detail, and
+:func:`explained_faces` explains none of its faces away: an ideal solid's narrow faces and
+edge touches are left to :func:`edge_faces`."""
+
+
+def explained_faces(
+    faces: Sequence[Face],
+    supporting: Sequence[bool],
+    centres: FloatArray,
+    rho: float,
+    *,
+    noise: float = 0.0,
+    rounding: float | None = None,
+    relief: float | None = None,
+    max_faces: int = 40,
+) -> list[int]:
+    """Indices of the contact faces whose touches the other faces already explain.
+
+    A real surface makes faces that are not faces of the object: touches of a rounded edge
+    (their normals between two faces', their tip centres near both planes' line), a bump or
+    a letter under a few contacts that fired a tilted sensor, one face fitted in two halves.
+    Their tip centres lie where the tip touching the polyhedron ``P`` of the *other* faces
+    would be: at distance ρ from ``P``, less a rounded edge's inset, plus relief and noise.
+    A face of the object lies elsewhere: without it ``P`` overshoots it (a corner that is
+    not there), and its centres lie inside the ρ-offset of ``P`` by the depth of that corner.
+
+    For each centre the *misfit* ``e = dist(c, P) − ρ`` is measured (positive outside). The
+    face is explained when every one of its centres has
+
+    * ``e ≤ relief + detail + 3σ`` (bumps and relief lift a centre by at most their height,
+      a scan's roughness by a few times the scatter the faces show), and
+    * ``e ≥ −(inset + detail + 3σ)``: a tip on an edge rounded with radius ``r``, against
+      faces of ``P`` (within ρ of their planes) whose normals' mean is at most ψ from each
+      (at most 75°), lies up to ``inset = r·(1/cos ψ − 1)`` inside the sharp edge's ρ-offset
+      (``r(√2 − 1)`` at a box's edge), ``r`` being ``rounding`` × the width of the narrowest
+      of those faces; against one face the inset is 0. A face the touched object reaches
+      beyond (not supporting: no face of a convex object) may be inset by ``rounding`` ×
+      that width, at most ρ.
+
+    σ is the declared noise; ``detail`` is :data:`DETAIL_SIGMAS` × the median RMS scatter of
+    the tip centres of the faces of six or more contacts about their planes, less the
+    declared noise (in quadrature). Faces are
+    examined fewest contacts first and removed one at a time while the others still close;
+    the table is never removed, and faces are only looked for against faces at least
+    ``geometry.edge_min_width`` tip radii wide (next to narrow faces only, as on a curved
+    object, every face stays).
+
+    Parameters
+    ----------
+    faces
+        The faces (the table included).
+    supporting
+        Per face, whether it supports the object (:func:`tactile_kb.geometry.model.build_model`):
+        only supporting faces make ``P``.
+    centres
+        (n, 3) tip centres of the record's contacts (faces index them).
+    rho
+        The tip radius.
+    noise
+        σ of the contact positions (m).
+    rounding
+        ``geometry.edge_rounding`` by default.
+    relief
+        Height of surface detail (m); by default ``geometry.relief_rho`` × ρ.
+    max_faces
+        More faces than this are not examined (a curved object's many narrow faces).
+    """
+    geo = current().geometry
+    if rounding is None:
+        rounding = geo.edge_rounding
+    if relief is None:
+        relief = geo.relief_rho * rho
+    removed: list[int] = []
+    if len(faces) > max_faces or len(faces) < 5:
+        return removed
+    normals = np.asarray([f.normal for f in faces], dtype=float).reshape(-1, 3)
+    offsets = np.asarray([f.offset for f in faces], dtype=float)
+    pts = centres[[i for f in faces for i in f.contacts]] if len(centres) else centres
+    if len(pts) < 4:
+        return removed
+    # the others must close where the model's polyhedron must (three times the touched
+    # points' radius about their centre, as :func:`tactile_kb.geometry.model.build_model`)
+    centre = pts.mean(axis=0)
+    bound = (centre, 3.0 * float(np.linalg.norm(pts - centre, axis=1).max()))
+    kept = list(range(len(faces)))
+    cos_cap = math.cos(math.radians(75.0))
+    # the surface's detail as the faces measure it: the median scatter of the tip centres of
+    # the faces that span a plane about it (a scan's noise lifts a tip by a few times that)
+    # (beyond the declared noise, which the slack below covers)
+    scatter = [f.residual for f in faces if f.refined and f.n_contacts >= 6]
+    rough = float(np.median(scatter)) if scatter else 0.0
+    excess = math.sqrt(max(rough * rough - noise * noise, 0.0))
+    if excess <= SMOOTH_RHO * rho:
+        return removed  # a surface with no detail beyond the noise: no rounding, no relief
+    detail = DETAIL_SIGMAS * excess
+    while True:
+        best: int | None = None
+        order = sorted(
+            (k for k in kept if faces[k].source == "contacts" and faces[k].contacts),
+            key=lambda k: (faces[k].n_contacts, k),
+        )
+        for k in order:
+            if not supporting[k] and faces[k].refined:
+                continue  # a concave face explored as a plane (a U-block's hollow): a face
+            others = [j for j in kept if j != k and supporting[j]]
+            if len(others) < 4:
+                continue
+            try:
+                poly = polyhedron_from_planes(normals[others], offsets[others], bound=bound)
+            except GeometryError:
+                continue  # the others do not close without it: a face
+            c = centres[list(faces[k].contacts)]
+            misfit = _signed_distance(c, poly.normals, poly.offsets) - rho
+            over = c @ poly.normals.T - poly.offsets
+            near = over >= -rho  # the planes each centre lies against (within ρ of the offset)
+            widths = np.asarray([face_width(poly, f) for f in range(len(poly.faces))])
+            if not near.any():
+                continue
+            against = np.flatnonzero(near.any(axis=0))
+            if float(widths[against].max()) < geo.edge_min_width * rho:
+                continue  # only narrow faces around: a curved object's facets stay
+            inset = np.zeros(len(c))
+            for i in range(len(c)):
+                at = np.flatnonzero(near[i])
+                if not supporting[k] and len(at):
+                    # a plane the touched object reaches beyond is no face of a convex
+                    # object: a rounding as deep as any edge's of these faces explains it,
+                    # up to the tip's own radius
+                    inset[i] = min(rounding * float(widths[at].min()), rho)
+                    continue
+                if len(at) < 2:
+                    continue  # against one face: a flat face's touch, no rounding inset
+                mean = poly.normals[at].sum(axis=0)
+                mean /= max(float(np.linalg.norm(mean)), 1e-12)
+                cos_psi = max(float((poly.normals[at] @ mean).min()), cos_cap)
+                inset[i] = rounding * float(widths[at].min()) * (1.0 / cos_psi - 1.0)
+            slack = 3.0 * noise
+            if float(misfit.max()) <= relief + detail + slack and bool(
+                (misfit >= -(inset + detail + slack)).all()
+            ):
+                best = k
+                break
+        if best is None:
+            return sorted(removed)
+        kept.remove(best)
+        removed.append(best)
+
+
+def rounding_insets(
+    normals: FloatArray,
+    offsets: FloatArray,
+    widths: FloatArray,
+    centres: FloatArray,
+    rho: float,
+    *,
+    rounding: float | None = None,
+) -> tuple[FloatArray, FloatArray]:
+    """How far each tip centre lies inside the ρ-offset of a convex polyhedron, and how far
+    an edge rounding could put it there: ``(inset, allowed)``, metres, per centre.
+
+    ``inset = ρ − dist(c, P)`` (negative when the centre lies further out: relief, noise).
+    A tip on an edge of ``P`` rounded with radius ``r``, where the surface normal is at angle
+    ψ from the normals of the faces the centre lies against (within ρ of their planes;
+    ψ the largest angle between their mean and each, at most 75°), lies at most
+    ``r·(1/cos ψ − 1)`` inside: ``allowed`` is that with ``r`` = ``rounding`` × the width of
+    the narrowest of those faces (``widths``, per plane), and 0 against a single face (a
+    flat face's touch). A centre further in than ``allowed`` touched an edge rounded more
+    than a polyhedron's are: a curved surface between the faces (a cylinder's), or a face
+    the planes do not have."""
+    if rounding is None:
+        rounding = current().geometry.edge_rounding
+    c = np.asarray(centres, dtype=float).reshape(-1, 3)
+    inset = rho - _signed_distance(c, normals, offsets)
+    over = c @ normals.T - offsets
+    near = over >= -rho
+    allowed = np.zeros(len(c))
+    cos_cap = math.cos(math.radians(75.0))
+    for i in np.flatnonzero(near.sum(axis=1) >= 2):
+        at = np.flatnonzero(near[i])
+        mean = normals[at].sum(axis=0)
+        mean /= max(float(np.linalg.norm(mean)), 1e-12)
+        cos_psi = max(float((normals[at] @ mean).min()), cos_cap)
+        allowed[i] = rounding * float(widths[at].min()) * (1.0 / cos_psi - 1.0)
+    return inset, allowed
