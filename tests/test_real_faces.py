@@ -15,7 +15,7 @@ from scanlike import bumped, rounded_box
 
 from tactile_kb.features.builtin import surface_curved
 from tactile_kb.geometry.model import build_model
-from tactile_kb.geometry.planes import explained_faces, rounding_insets
+from tactile_kb.geometry.planes import explained_faces
 from tactile_kb.perturb import touch_record
 from tactile_kb.solids import box
 from tactile_kb.touch.finger import builtin_finger
@@ -94,24 +94,3 @@ def test_explained_faces_drops_an_edge_touch_and_keeps_a_real_face() -> None:
     # touch away; edge_faces is the one that judges it
     smooth = [dataclasses.replace(f, residual=0.0) for f in all_faces]
     assert explained_faces(smooth, supporting, centres, RHO) == []
-
-
-def test_rounding_insets_of_a_rounded_edge_within_allowance() -> None:
-    # a 4 cm square prism's edge rounded with 10 % of its width: the tip centre at the
-    # bisector lies r·(√2 − 1) inside the sharp edge's ρ-offset, as allowed
-    half, r = 0.02, 0.004
-    normals = np.array(
-        [[1.0, 0, 0], [0, 1.0, 0], [-1.0, 0, 0], [0, -1.0, 0], [0, 0, 1.0], [0, 0, -1.0]]
-    )
-    offsets = np.array([half, half, half, half, 0.05, 0.0])
-    widths = np.full(6, 2 * half)
-    m = np.array([1.0, 1.0, 0.0]) / np.sqrt(2.0)
-    c = np.array([half - r, half - r, 0.025]) + (RHO + r) * m
-    inset, allowed = rounding_insets(normals, offsets, widths, c[None, :], RHO, rounding=0.1)
-    assert inset[0] == pytest.approx(r * (np.sqrt(2.0) - 1.0), rel=1e-6)
-    assert allowed[0] == pytest.approx(0.1 * 2 * half * (np.sqrt(2.0) - 1.0), rel=1e-6)
-    # in the middle of a face: no inset, nothing allowed
-    mid = np.array([[half + RHO, 0.0, 0.025]])
-    inset, allowed = rounding_insets(normals, offsets, widths, mid, RHO, rounding=0.1)
-    assert abs(inset[0]) < 1e-12
-    assert allowed[0] == 0.0

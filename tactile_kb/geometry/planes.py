@@ -79,7 +79,6 @@ __all__ = [
     "merge_plane_arrays",
     "merge_planes",
     "nearest_points",
-    "rounding_insets",
 ]
 
 
@@ -1073,41 +1072,3 @@ def explained_faces(
             return sorted(removed)
         kept.remove(best)
         removed.append(best)
-
-
-def rounding_insets(
-    normals: FloatArray,
-    offsets: FloatArray,
-    widths: FloatArray,
-    centres: FloatArray,
-    rho: float,
-    *,
-    rounding: float | None = None,
-) -> tuple[FloatArray, FloatArray]:
-    """How far each tip centre lies inside the ρ-offset of a convex polyhedron, and how far
-    an edge rounding could put it there: ``(inset, allowed)``, metres, per centre.
-
-    ``inset = ρ − dist(c, P)`` (negative when the centre lies further out: relief, noise).
-    A tip on an edge of ``P`` rounded with radius ``r``, where the surface normal is at angle
-    ψ from the normals of the faces the centre lies against (within ρ of their planes;
-    ψ the largest angle between their mean and each, at most 75°), lies at most
-    ``r·(1/cos ψ − 1)`` inside: ``allowed`` is that with ``r`` = ``rounding`` × the width of
-    the narrowest of those faces (``widths``, per plane), and 0 against a single face (a
-    flat face's touch). A centre further in than ``allowed`` touched an edge rounded more
-    than a polyhedron's are: a curved surface between the faces (a cylinder's), or a face
-    the planes do not have."""
-    if rounding is None:
-        rounding = current().geometry.edge_rounding
-    c = np.asarray(centres, dtype=float).reshape(-1, 3)
-    inset = rho - _signed_distance(c, normals, offsets)
-    over = c @ normals.T - offsets
-    near = over >= -rho
-    allowed = np.zeros(len(c))
-    cos_cap = math.cos(math.radians(75.0))
-    for i in np.flatnonzero(near.sum(axis=1) >= 2):
-        at = np.flatnonzero(near[i])
-        mean = normals[at].sum(axis=0)
-        mean /= max(float(np.linalg.norm(mean)), 1e-12)
-        cos_psi = max(float((normals[at] @ mean).min()), cos_cap)
-        allowed[i] = rounding * float(widths[at].min()) * (1.0 / cos_psi - 1.0)
-    return inset, allowed
