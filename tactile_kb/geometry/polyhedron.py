@@ -30,6 +30,8 @@ from __future__ import annotations
 import functools
 import itertools
 import math
+from collections import OrderedDict
+from collections.abc import Callable
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -102,6 +104,9 @@ class Polyhedron:
     face_areas: FloatArray
     face_centroids: FloatArray
     plane_index: tuple[int, ...] = field(default=())
+    _widths: dict[int, float] = field(
+        default_factory=dict, init=False, repr=False, compare=False
+    )  # face_width's answers
 
     @property
     def diameter(self) -> float:
@@ -248,7 +253,32 @@ def _interior_point(
 
 
 def _chebyshev(n: FloatArray, d: FloatArray) -> tuple[FloatArray, float]:
-    """The centre and radius of the largest ball inside ``n · x ≤ d``."""
+    """The centre and radius of the largest ball inside ``n · x ≤ d`` (the last few answers
+    are kept, by the exact planes: the linear programme costs more than the intersection)."""
+    key = (n.tobytes(), d.tobytes())
+    hit = _CENTRES.get(key)
+    if hit is None:
+        try:
+            hit = _chebyshev_lp(n, d)
+        except GeometryError as exc:
+            hit = _maker(exc)
+        _CENTRES[key] = hit
+        if len(_CENTRES) > _BUILT_SIZE:
+            _CENTRES.popitem(last=False)
+    else:
+        _CENTRES.move_to_end(key)
+    if callable(hit):
+        raise hit()
+    return hit[0].copy(), hit[1]
+
+
+_CENTRES: OrderedDict[
+    tuple[bytes, bytes], tuple[FloatArray, float] | Callable[[], GeometryError]
+] = OrderedDict()
+
+
+def _chebyshev_lp(n: FloatArray, d: FloatArray) -> tuple[FloatArray, float]:
+    """:func:`_chebyshev` by linear programming."""
     c = np.zeros(4)
     c[3] = -1.0
     a = np.hstack([n, np.ones((len(n), 1))])
@@ -269,6 +299,13 @@ def _cross(a: FloatArray, b: FloatArray) -> FloatArray:
     return out
 
 
+def _cross3(a: FloatArray, b: FloatArray) -> FloatArray:
+    """The cross product of two 3-vectors (the same arithmetic as :func:`_cross`)."""
+    return np.array(
+        [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
+    )
+
+
 @functools.lru_cache(maxsize=16)
 def _pairs(m: int) -> tuple[NDArray[np.intp], NDArray[np.intp]]:
     """``np.triu_indices(m, 1)``, read-only and computed once per ``m``."""
@@ -280,9 +317,29 @@ def _pairs(m: int) -> tuple[NDArray[np.intp], NDArray[np.intp]]:
 
 def _components(close: NDArray[np.bool_]) -> NDArray[np.intp]:
     """Connected-component labels of a symmetric adjacency matrix, numbered in the order of
-    each component's smallest member."""
-    _, labels = connected_components(csr_array(close), directed=False)
+    each component's smallest member (as ``scipy.sparse.csgraph.connected_components``).
+
+    Each member takes the smallest index among itself and its neighbours until nothing
+    changes (as many rounds as the longest path in a component: one or two for the few
+    merged vertices of a polyhedron); past :data:`_PROPAGATE_ROUNDS` rounds scipy's graph
+    search finishes the job.
+    """
+    k = len(close)
+    if k == 0:
+        return np.zeros(0, dtype=np.intp)
+    link = close | close.T
+    np.fill_diagonal(link, True)
+    low = np.arange(k)
+    for _ in range(_PROPAGATE_ROUNDS):
+        nxt = np.where(link, low[None, :], k).min(axis=1)
+        if np.array_equal(nxt, low):
+            return np.asarray(np.unique(low, return_inverse=True)[1], dtype=np.intp).reshape(-1)
+        low = nxt
+    _, labels = connected_components(csr_array(link), directed=False)
     return np.asarray(labels, dtype=np.intp).reshape(-1)
+
+
+_PROPAGATE_ROUNDS = 8
 
 
 def _cluster_vertices(
@@ -321,15 +378,15 @@ def _cluster_vertices(
 
 def _order_polygon(points: FloatArray, normal: FloatArray) -> list[int]:
     """Indices ordering ``points`` counter-clockwise seen from the side ``normal`` points to."""
-    centre = points.mean(axis=0)
+    centre = points.sum(axis=0) / len(points)  # points.mean(axis=0), without its overhead
     u = points[0] - centre
     if math.sqrt(u @ u) < 1e-15:
-        u = _cross(normal, np.array([1.0, 0.0, 0.0]))
+        u = _cross3(normal, np.array([1.0, 0.0, 0.0]))
         if math.sqrt(u @ u) < 1e-9:
-            u = _cross(normal, np.array([0.0, 1.0, 0.0]))
+            u = _cross3(normal, np.array([0.0, 1.0, 0.0]))
     u = u - normal * (u @ normal)
     u /= math.sqrt(u @ u)
-    v = _cross(normal, u)
+    v = _cross3(normal, u)
     rel = points - centre
     ang = np.arctan2(rel @ v, rel @ u)
     return [int(i) for i in np.argsort(ang, kind="stable")]
@@ -378,26 +435,26 @@ def polyhedron_from_planes(
     if merge_fraction is None:
         merge_fraction = current().geometry.merge_fraction
     n, d = _as_planes(normals, offsets)
-    opened = open_directions(n)
-    if opened:
-        names = ", ".join(_fmt(o) for o in opened[:6])
-        raise OpenModelError(
-            f"the {len(n)} planes do not bound a region: open towards {names} (explore that side)",
-            opened,
-        )
-    centre, radius = _interior_point(n, d, interior)
-    scale = max(float(np.abs(d - n @ centre).max()), 1e-12)
-    if radius <= 1e-9 * scale:
-        raise GeometryError("the planes enclose a flat or empty region (no interior point)")
-    try:
-        hs = HalfspaceIntersection(np.hstack([n, -d[:, None]]), centre)
-    except QhullError as exc:  # pragma: no cover - guarded by the checks above
-        raise GeometryError(
-            f"Qhull could not intersect the planes: {str(exc).splitlines()[0]}"
-        ) from None
-    raw = np.asarray(hs.intersections, dtype=float)
+    hint = None if interior is None else np.asarray(interior, dtype=float).reshape(-1)
+    key = (
+        n.tobytes(),
+        d.tobytes(),
+        None if hint is None else hint.tobytes(),
+        None if tol is None else float(tol),
+        float(merge_fraction),
+    )
+    built = _BUILT.get(key)
+    if built is None:
+        built = _build(n, d, tol, float(merge_fraction), hint)
+        _BUILT[key] = built
+        if len(_BUILT) > _BUILT_SIZE:
+            _BUILT.popitem(last=False)
+    else:
+        _BUILT.move_to_end(key)
+    if built.early is not None:
+        raise built.early()
     if bound is not None:
-        far = _far_directions(raw, np.asarray(bound[0], dtype=float), float(bound[1]))
+        far = _far_directions(built.raw, np.asarray(bound[0], dtype=float), float(bound[1]))
         if far:
             names = ", ".join(_fmt(o) for o in far[:6])
             raise OpenModelError(
@@ -405,6 +462,113 @@ def polyhedron_from_planes(
                 f"{names} (explore that side)",
                 far,
             )
+    if built.late is not None:
+        raise built.late()
+    assert built.poly is not None
+    return built.poly
+
+
+@dataclass(frozen=True)
+class _Built:
+    """What :func:`polyhedron_from_planes` makes of one plane set, before its ``bound`` test:
+    the error raised before Qhull (``early``), Qhull's raw vertices, and the polyhedron or the
+    error its assembly raised (``late``). Errors are kept as makers, so each raise is new."""
+
+    early: Callable[[], GeometryError] | None
+    raw: FloatArray
+    poly: Polyhedron | None
+    late: Callable[[], GeometryError] | None
+
+
+_BUILT_SIZE = 1024
+"""Plane sets whose polyhedra are kept (least recently used first out): a model is rebuilt
+after every completion probe from mostly the same faces, and the edge and explained-face
+tests build the polyhedron of every subset of them again."""
+
+_BUILT: OrderedDict[tuple[bytes, bytes, bytes | None, float | None, float], _Built] = OrderedDict()
+
+
+def _maker(exc: GeometryError) -> Callable[[], GeometryError]:
+    """A function that makes a fresh copy of ``exc`` (same class, message and directions)."""
+    if isinstance(exc, OpenModelError):
+        message, dirs = str(exc), list(exc.open_directions)
+        return lambda: OpenModelError(message, list(dirs))
+    cls, message = type(exc), str(exc)
+    return lambda: cls(message)
+
+
+def _frozen(poly: Polyhedron) -> Polyhedron:
+    """``poly`` with its arrays read-only: a cached polyhedron is shared by its callers."""
+    for name in (
+        "vertices",
+        "normals",
+        "offsets",
+        "dihedral_deg",
+        "centroid",
+        "face_areas",
+        "face_centroids",
+    ):
+        getattr(poly, name).flags.writeable = False
+    return poly
+
+
+def _build(
+    n: FloatArray, d: FloatArray, tol: float | None, merge_fraction: float, hint: FloatArray | None
+) -> _Built:
+    """:func:`polyhedron_from_planes` of the normalised planes ``n``, ``d``, without the
+    ``bound`` test (made on ``raw`` by the caller)."""
+    empty = np.zeros((0, 3))
+    opened = open_directions(n)
+    if opened:
+        names = ", ".join(_fmt(o) for o in opened[:6])
+        return _Built(
+            _maker(
+                OpenModelError(
+                    f"the {len(n)} planes do not bound a region: open towards {names} "
+                    "(explore that side)",
+                    opened,
+                )
+            ),
+            empty,
+            None,
+            None,
+        )
+    try:
+        centre, radius = _interior_point(n, d, hint)
+    except GeometryError as exc:
+        return _Built(_maker(exc), empty, None, None)
+    scale = max(float(np.abs(d - n @ centre).max()), 1e-12)
+    if radius <= 1e-9 * scale:
+        return _Built(
+            _maker(GeometryError("the planes enclose a flat or empty region (no interior point)")),
+            empty,
+            None,
+            None,
+        )
+    try:
+        hs = HalfspaceIntersection(np.hstack([n, -d[:, None]]), centre)
+    except QhullError as exc:  # pragma: no cover - guarded by the checks above
+        message = f"Qhull could not intersect the planes: {str(exc).splitlines()[0]}"
+        return _Built(_maker(GeometryError(message)), empty, None, None)
+    raw = np.asarray(hs.intersections, dtype=float)
+    raw.flags.writeable = False
+    try:
+        poly = _topology(n, d, tol, merge_fraction, raw, hs.dual_facets)
+    except GeometryError as exc:
+        return _Built(None, raw, None, _maker(exc))
+    return _Built(None, raw, _frozen(poly), None)
+
+
+def _topology(
+    n: FloatArray,
+    d: FloatArray,
+    tol: float | None,
+    merge_fraction: float,
+    raw: FloatArray,
+    facets: list[list[int]],
+) -> Polyhedron:
+    """The polyhedron of Qhull's vertices ``raw`` and the planes active at each
+    (``facets``): merged vertices, faces, topology."""
     # tolerance: the exact activity of every plane at every raw vertex, by distance
     diam = float(np.ptp(raw, axis=0).max()) if len(raw) else 0.0
     merge_tol = tol if tol is not None else merge_fraction * diam
@@ -417,7 +581,6 @@ def polyhedron_from_planes(
     k = int(labels.max()) + 1 if len(raw) else 0
     # active[v, p]: plane p passes through vertex v (Qhull's facet, or within eps of a member)
     hit = np.abs(raw @ n.T - d[None, :]) <= eps
-    facets = hs.dual_facets
     sizes = [len(f) for f in facets]
     flat = np.fromiter(itertools.chain.from_iterable(facets), dtype=np.intp, count=sum(sizes))
     hit[np.repeat(np.arange(len(facets)), sizes), flat] = True
@@ -550,7 +713,26 @@ def vertex_covariances(
 
 
 def face_width(poly: Polyhedron, face: int) -> float:
-    """The in-plane width of a polyhedron face: its extent across its longest direction."""
+    """The in-plane width of a polyhedron face: its extent across its longest direction
+    (computed once per face of ``poly``)."""
+    memo = poly._widths
+    if not memo:  # every face's at once: the faces of one size in one batch
+        sizes = np.asarray([len(f) for f in poly.faces], dtype=np.intp)
+        for m in np.unique(sizes).tolist():
+            which = np.flatnonzero(sizes == m)
+            if m < 3:
+                memo.update(dict.fromkeys(which.tolist(), 0.0))
+                continue
+            v = poly.vertices[np.asarray([poly.faces[f] for f in which], dtype=np.intp)]
+            centred = v - v.sum(axis=1)[:, None, :] / m  # v.mean(axis=1), as before per face
+            _, _, vt = np.linalg.svd(centred, full_matrices=False)
+            across = (centred @ vt[:, 1][:, :, None])[:, :, 0]
+            memo.update(zip(which.tolist(), np.ptp(across, axis=1).tolist(), strict=True))
+    return memo[face] if 0 <= face < len(poly.faces) else _face_width(poly, face)
+
+
+def _face_width(poly: Polyhedron, face: int) -> float:
+    """:func:`face_width` of one face, computed alone (an index out of range raises)."""
     v = poly.vertices[list(poly.faces[face])]
     if len(v) < 3:
         return 0.0
