@@ -358,18 +358,24 @@ def _cluster_vertices(
     np.add.at(sums, labels, raw)
     means = sums / np.bincount(labels, minlength=k)[:, None]
     verts = means.copy()
-    rows, cols = np.nonzero(active)  # the planes active at each vertex, in order
-    bounds = np.searchsorted(rows, np.arange(k + 1)).tolist()
-    planes = [cols[i:j] for i, j in itertools.pairwise(bounds)]
-    solvable = [v for v in range(k) if len(planes[v]) >= 3]
-    if solvable:
-        mats = np.stack([n[planes[v]].T @ n[planes[v]] for v in solvable])
-        rhs = np.stack([n[planes[v]].T @ d[planes[v]] for v in solvable])
+    count = active.sum(axis=1)
+    solvable = np.flatnonzero(count >= 3)
+    if len(solvable):
+        # n[P]ᵀ n[P] and n[P]ᵀ d[P] of the planes P active at each vertex, the vertices with
+        # the same number of planes in one stacked product
+        mats = np.empty((len(solvable), 3, 3))
+        rhs = np.empty((len(solvable), 3))
+        for c in np.unique(count[solvable]).tolist():
+            pos = np.flatnonzero(count[solvable] == c)
+            planes = np.nonzero(active[solvable[pos]])[1].reshape(len(pos), c)
+            nt = n[planes].transpose(0, 2, 1)
+            mats[pos] = nt @ n[planes]
+            rhs[pos] = (nt @ d[planes][:, :, None])[:, :, 0]
         sv = np.linalg.svd(mats, compute_uv=False)
         with np.errstate(divide="ignore", invalid="ignore"):
             good = sv[:, 0] / sv[:, -1] < 1e8  # the condition number (inf/nan: singular)
         if good.any():
-            which = np.asarray(solvable)[good]
+            which = solvable[good]
             verts[which] = np.linalg.solve(mats[good], rhs[good][:, :, None])[:, :, 0]
     far = np.linalg.norm(verts - means, axis=1) > max_shift
     verts[far] = means[far]
@@ -390,6 +396,26 @@ def _order_polygon(points: FloatArray, normal: FloatArray) -> list[int]:
     rel = points - centre
     ang = np.arctan2(rel @ v, rel @ u)
     return [int(i) for i in np.argsort(ang, kind="stable")]
+
+
+def _order_polygons(points: FloatArray, normals: FloatArray) -> list[list[int]]:
+    """:func:`_order_polygon` of each polygon ``points[i]`` (B, m, 3) about ``normals[i]``,
+    computed together (the same arithmetic; a polygon whose first point is its centre goes
+    alone)."""
+    m = points.shape[1]
+    centre = points.sum(axis=1) / m
+    u = points[:, 0] - centre
+    lone = np.sqrt((u[:, None, :] @ u[:, :, None])[:, 0, 0]) < 1e-15
+    with np.errstate(divide="ignore", invalid="ignore"):  # the lone ones are redone below
+        u = u - normals * (u[:, None, :] @ normals[:, :, None])[:, 0]
+        u /= np.sqrt((u[:, None, :] @ u[:, :, None])[:, 0])
+        v = _cross(normals, u)
+        rel = points - centre[:, None, :]
+        ang = np.arctan2((rel @ v[:, :, None])[:, :, 0], (rel @ u[:, :, None])[:, :, 0])
+    out = np.argsort(ang, axis=1, kind="stable").tolist()
+    for i in np.flatnonzero(lone).tolist():
+        out[i] = _order_polygon(points[i], normals[i])
+    return [list(map(int, o)) for o in out]
 
 
 def polyhedron_from_planes(
@@ -606,10 +632,16 @@ def _topology(
     remap = np.full(k, -1, dtype=np.intp)
     remap[used] = np.arange(len(used))
     vertices = verts[used]
-    faces: list[tuple[int, ...]] = []
-    for p, row in zip(face_planes, on_face[:, face_planes].T, strict=True):
-        idx = remap[np.flatnonzero(row)]
-        faces.append(tuple(idx[_order_polygon(vertices[idx], n[p])].tolist()))
+    # each face's vertices counter-clockwise, the faces with as many vertices in one batch
+    rows = on_face[:, face_planes].T
+    sizes = rows.sum(axis=1)
+    faces: list[tuple[int, ...]] = [()] * len(face_planes)
+    for m in np.unique(sizes).tolist():
+        which = np.flatnonzero(sizes == m)
+        idx = remap[np.nonzero(rows[which])[1].reshape(len(which), m)]
+        order = _order_polygons(vertices[idx], n[np.asarray(face_planes)[which]])
+        for w, ix, o in zip(which.tolist(), idx, order, strict=True):
+            faces[w] = tuple(ix[o].tolist())
     return _assemble(vertices, faces, n[face_planes], d[face_planes], tuple(face_planes))
 
 
