@@ -37,6 +37,7 @@ Examples
 from __future__ import annotations
 
 import copy
+import dataclasses
 import math
 from collections import Counter
 from collections.abc import Callable
@@ -886,6 +887,10 @@ def _v(a: FloatArray) -> tuple[float, float, float]:
     return (float(a[0]), float(a[1]), float(a[2]))
 
 
+_MODEL_INPUTS = {"contacts", "layers", "noise", "tip_radius", "sensor_directions"}
+"""The fields of a record :func:`~tactile_kb.geometry.model.build_model` reads."""
+
+
 class ModelCompleter:
     """A :class:`~tactile_kb.touch.servo.Completer`: probes from the model of the record so far.
 
@@ -902,6 +907,7 @@ class ModelCompleter:
         self._path_probes = 0
         self._corner_probes = 0
         self.probes = 0
+        self._last: tuple[str, ObjectModel] | None = None
 
     def _budget(self, record: ExplorationRecord, model: ObjectModel) -> tuple[int, float]:
         """The completion's touch and path budgets for ``record``."""
@@ -931,7 +937,7 @@ class ModelCompleter:
         if self._start is None:
             self._start = (record.touches, record.path_length)
         try:
-            model = build_model(record)
+            model = self._model(record)
         except (TactileKBError, np.linalg.LinAlgError, ValueError) as exc:
             text = f"the model cannot be built after {record.touches} touches: {exc}"
             return Ending("unreachable", text, (str(exc),))
@@ -992,6 +998,16 @@ class ModelCompleter:
         elif probe.reason.startswith(_TESTS):
             self._path_probes += 1
         return probe
+
+    def _model(self, record: ExplorationRecord) -> ObjectModel:
+        """``build_model(record)``; the last model again (with ``record``) when a probe
+        added nothing the model is built from (it touched nothing)."""
+        key = record.model_dump_json(include=_MODEL_INPUTS)
+        if self._last is not None and self._last[0] == key:
+            return dataclasses.replace(self._last[1], record=record)
+        model = build_model(record)
+        self._last = (key, model)
+        return model
 
     def _allowed(self, p: Probe) -> bool:
         """Whether ``p`` may be asked for: what holds the completion open always; a test of
