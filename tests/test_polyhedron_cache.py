@@ -21,6 +21,7 @@ from tactile_kb.completion import ModelCompleter
 from tactile_kb.errors import GeometryError, OpenModelError
 from tactile_kb.geometry import polyhedron as ph
 from tactile_kb.geometry.model import build_model
+from tactile_kb.geometry.planes import nearest_points
 from tactile_kb.touch.finger import builtin_finger
 from tactile_kb.touch.synthetic import sample_record
 
@@ -227,3 +228,44 @@ def test_completer_reuses_the_model_only_for_the_same_inputs() -> None:
     third = completer._model(fewer)
     assert third.faces == build_model(fewer).faces
     assert third.record is fewer
+
+
+def _plain_nearest(x: np.ndarray, n: np.ndarray, d: np.ndarray) -> np.ndarray:
+    """:func:`nearest_points` as it was: every plane projected in every sweep."""
+    over = x @ n.T - d
+    worst = over.argmax(axis=1)
+    q = x - np.maximum(over[np.arange(len(x)), worst], 0.0)[:, None] * n[worst]
+    hard = np.flatnonzero((q @ n.T - d).max(axis=1) > 1e-12)
+    if len(hard) == 0:
+        return q
+    y = x[hard].copy()
+    corr = np.zeros((len(n), *y.shape))
+    for _ in range(60):
+        for i in range(len(n)):
+            z = y + corr[i]
+            y = z - np.maximum(z @ n[i] - d[i], 0.0)[:, None] * n[i][None, :]
+            corr[i] = z - y
+    q[hard] = y
+    return q
+
+
+@pytest.mark.parametrize("mesh", SOLIDS)
+def test_nearest_points_skip_only_idle_planes(mesh: trimesh.Trimesh) -> None:
+    """Skipping the planes every point lies well inside of gives the plain projections' bits."""
+    n, d = _planes(mesh)
+    rng = np.random.default_rng(7)
+    for size in (1, 3, 40):
+        x = np.asarray(mesh.centroid) + rng.normal(scale=0.08, size=(size, 3))
+        got = nearest_points(x, n, d)
+        assert np.array_equal(got, _plain_nearest(x, n, d))
+        assert ((got @ n.T - d).max(axis=1) <= 1e-6).all()  # on the solid (as converged)
+        inside = (x @ n.T - d).max(axis=1) <= 0
+        assert np.array_equal(got[inside], x[inside])
+
+
+def test_nearest_points_of_a_box_are_clipped_coordinates() -> None:
+    lo, hi = np.array([-0.04, -0.03, 0.0]), np.array([0.04, 0.03, 0.05])
+    n = np.vstack([np.eye(3), -np.eye(3)])
+    d = np.concatenate([hi, -lo])
+    x = np.random.default_rng(8).uniform(-0.1, 0.1, size=(200, 3))
+    assert np.allclose(nearest_points(x, n, d), np.clip(x, lo, hi), atol=1e-12)

@@ -783,13 +783,29 @@ def nearest_points(
         return q
     y = x[hard].copy()
     corr = np.zeros((len(n), *y.shape))
+    live = np.zeros(len(n), dtype=bool)  # corr[i] is not all zero
     for _ in range(iterations):
-        for i in range(len(n)):
+        i = 0
+        while i < len(n):
+            # A step on a plane with no correction to undo, that every point lies inside of,
+            # adds and removes nothing: skip to the next plane that can act (the margin covers
+            # the rounding of this batched product against the step's own).
+            idle = ~live[i:] & ((y @ n[i:].T - d[i:]) < -_IDLE_MARGIN).all(axis=0)
+            busy = np.flatnonzero(~idle)
+            if len(busy) == 0:
+                break
+            i += int(busy[0])
             z = y + corr[i]
             y = z - np.maximum(z @ n[i] - d[i], 0.0)[:, None] * n[i][None, :]
             corr[i] = z - y
+            live[i] = bool(corr[i].any())
+            i += 1
     q[hard] = y
     return q
+
+
+_IDLE_MARGIN = 1e-12
+"""Metres: :func:`nearest_points` skips a plane that every point lies further inside of."""
 
 
 def edge_faces(
