@@ -258,7 +258,6 @@ def test_nearest_points_skip_only_idle_planes(mesh: trimesh.Trimesh) -> None:
         x = np.asarray(mesh.centroid) + rng.normal(scale=0.08, size=(size, 3))
         got = nearest_points(x, n, d)
         assert np.array_equal(got, _plain_nearest(x, n, d))
-        assert ((got @ n.T - d).max(axis=1) <= 1e-6).all()  # on the solid (as converged)
         inside = (x @ n.T - d).max(axis=1) <= 0
         assert np.array_equal(got[inside], x[inside])
 
