@@ -30,9 +30,11 @@ from __future__ import annotations
 import functools
 import itertools
 import math
+import threading
 from collections import OrderedDict
 from collections.abc import Callable
 from dataclasses import dataclass, field
+from typing import TypeVar
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -255,18 +257,14 @@ def _interior_point(
 def _chebyshev(n: FloatArray, d: FloatArray) -> tuple[FloatArray, float]:
     """The centre and radius of the largest ball inside ``n · x ≤ d`` (the last few answers
     are kept, by the exact planes: the linear programme costs more than the intersection)."""
-    key = (n.tobytes(), d.tobytes())
-    hit = _CENTRES.get(key)
-    if hit is None:
+
+    def solve() -> tuple[FloatArray, float] | Callable[[], GeometryError]:
         try:
-            hit = _chebyshev_lp(n, d)
+            return _chebyshev_lp(n, d)
         except GeometryError as exc:
-            hit = _maker(exc)
-        _CENTRES[key] = hit
-        if len(_CENTRES) > _BUILT_SIZE:
-            _CENTRES.popitem(last=False)
-    else:
-        _CENTRES.move_to_end(key)
+            return _maker(exc)
+
+    hit = _recall(_CENTRES, (n.tobytes(), d.tobytes()), solve)
     if callable(hit):
         raise hit()
     return hit[0].copy(), hit[1]
@@ -469,14 +467,8 @@ def polyhedron_from_planes(
         None if tol is None else float(tol),
         float(merge_fraction),
     )
-    built = _BUILT.get(key)
-    if built is None:
-        built = _build(n, d, tol, float(merge_fraction), hint)
-        _BUILT[key] = built
-        if len(_BUILT) > _BUILT_SIZE:
-            _BUILT.popitem(last=False)
-    else:
-        _BUILT.move_to_end(key)
+    mf = float(merge_fraction)
+    built = _recall(_BUILT, key, lambda: _build(n, d, tol, mf, hint))
     if built.early is not None:
         raise built.early()
     if bound is not None:
@@ -512,6 +504,27 @@ after every completion probe from mostly the same faces, and the edge and explai
 tests build the polyhedron of every subset of them again."""
 
 _BUILT: OrderedDict[tuple[bytes, bytes, bytes | None, float | None, float], _Built] = OrderedDict()
+
+
+_K = TypeVar("_K")
+_V = TypeVar("_V")
+_LOCK = threading.Lock()
+
+
+def _recall(cache: OrderedDict[_K, _V], key: _K, make: Callable[[], _V]) -> _V:
+    """``cache[key]``, made by ``make()`` when missing; at most :data:`_BUILT_SIZE` entries,
+    the least recently used dropped first (a lock guards the dictionary: a batch may run a
+    timed-out task's thread beside the next one)."""
+    with _LOCK:
+        if key in cache:
+            cache.move_to_end(key)
+            return cache[key]
+    value = make()
+    with _LOCK:
+        cache[key] = value
+        while len(cache) > _BUILT_SIZE:
+            cache.popitem(last=False)
+    return value
 
 
 def _maker(exc: GeometryError) -> Callable[[], GeometryError]:
