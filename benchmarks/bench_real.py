@@ -22,7 +22,9 @@ The default run takes one perturbation seed (764 classifications with both explo
 20 minutes at 2 workers on a quiet 2-core machine). The issue's full figures take two:
 ``--seeds 2`` (1,292 classifications, about twice as long). ``--log FILE`` writes every outcome
 to a CSV file as it comes (the jobs run in a shuffled order, so an interrupted run's log is a
-fair sample), and ``--summarize FILE`` prints the figures of such a file.
+fair sample), and ``--summarize FILE`` prints the figures of such a file. ``--reverse`` runs
+the shuffled jobs from the last one back: a second process started beside a first one (each
+with its own ``--log``) meets it half-way, and the two logs together hold every outcome.
 """
 
 from __future__ import annotations
@@ -277,6 +279,12 @@ def main(argv: list[str] | None = None) -> None:
     ap.add_argument("--no-real", action="store_true", help="leave out the vendored real objects")
     ap.add_argument("--log", type=Path, help="write each outcome to this CSV file as it comes")
     ap.add_argument("--summarize", type=Path, help="print the figures of a --log file and stop")
+    ap.add_argument(
+        "--reverse",
+        action="store_true",
+        help="run the shuffled jobs from the last one back (a second process that meets a "
+        "first one half-way; --summarize the two logs concatenated)",
+    )
     args = ap.parse_args(argv if argv is not None else [])
     if args.summarize:
         summary(read_log(args.summarize))
@@ -290,6 +298,8 @@ def main(argv: list[str] | None = None) -> None:
     # In a shuffled order, an interrupted run's log is a fair sample of the whole.
     order = np.random.default_rng(0).permutation(len(todo))
     todo = [todo[int(k)] for k in order]
+    if args.reverse:
+        todo.reverse()
     t0 = time.perf_counter()
     results: list[Outcome] = []
     log = args.log.open("w", newline="") if args.log else None
