@@ -194,10 +194,37 @@ def _poly(model: ObjectModel, name: str) -> Polyhedron:
 
 
 def _uncertainty(model: ObjectModel) -> FloatArray:
-    """Per polyhedron face, the normal uncertainty (degrees) of its model face."""
+    """Per polyhedron face, the normal uncertainty (degrees) of its model face, with the
+    scatter of its tip centres pooled with the surface's (:func:`_pooled_scatter`)."""
     if not model.face_of:
         return np.zeros(0)
-    return np.asarray([model.faces[i].normal_uncertainty_deg for i in model.face_of], dtype=float)
+
+    def compute() -> FloatArray:
+        faces = [model.faces[i] for i in model.face_of]
+        surface = [f.residual for f in model.faces if f.refined and f.n_contacts >= 6]
+        detail = float(np.median(surface)) if surface else 0.0
+        out = []
+        for f in faces:
+            unc = f.normal_uncertainty_deg
+            m = f.n_contacts
+            if f.refined and m > 3 and f.residual > 0.0 and detail > 0.0:
+                own = f.residual * math.sqrt(m / (m - 3))  # σ of the fit, m − 3 dof
+                pooled = _pooled_scatter(own, m - 3, detail)
+                if pooled > own:
+                    unc = math.degrees(math.atan(math.tan(math.radians(unc)) * pooled / own))
+            out.append(unc)
+        return np.asarray(out, dtype=float)
+
+    return _derived(model, (__name__, current().features, "uncertainty"), compute)
+
+
+def _pooled_scatter(own: float, dof: int, surface: float) -> float:
+    """A face's scatter about its plane, ``own`` measured with ``dof`` degrees of freedom,
+    pooled with the surface's (``surface``: the median RMS of the faces touched six or more
+    times) as a prior worth :data:`RELIEF_DOF` degrees of freedom. A face touched five
+    times fits its plane with two degrees of freedom and may by chance show little of the
+    relief and noise the others show; its normal is then no more certain than theirs."""
+    return math.sqrt((dof * own**2 + RELIEF_DOF * surface**2) / (dof + RELIEF_DOF))
 
 
 def _tolerance(model: ObjectModel, tolerance_deg: float, sigmas: float) -> FloatArray:
