@@ -977,12 +977,17 @@ def explained_faces(
     * ``e ≤ relief + detail + 3σ`` (bumps and relief lift a centre by at most their height,
       a scan's roughness by a few times the scatter the faces show), and
     * ``e ≥ −(inset + detail + 3σ)``: a tip on an edge rounded with radius ``r``, against
-      faces of ``P`` (within ρ of their planes) whose normals' mean is at most ψ from each
-      (at most 75°), lies up to ``inset = r·(1/cos ψ − 1)`` inside the sharp edge's ρ-offset
-      (``r(√2 − 1)`` at a box's edge), ``r`` being ``rounding`` × the width of the narrowest
-      of those faces; against one face the inset is 0. A face the touched object reaches
-      beyond (not supporting: no face of a convex object) may be inset by ``rounding`` ×
-      that width, at most ρ.
+      faces of ``P`` whose normals' mean is at most ψ from each (at most 75°), lies up to
+      ``inset = r·(1/cos ψ − 1)`` inside the sharp edge's ρ-offset (``r(√2 − 1)`` at a
+      box's edge), ``r`` being ``rounding`` × the width of the narrowest of those faces;
+      against one face the inset is 0. The faces a centre lies against are those of the
+      edge whose rounding it may be on (:func:`_rounded_edge_planes`: within ρ of their
+      planes, or as far inside them as a rounding of radius ``r`` puts a tip). A face the
+      touched object reaches beyond (not supporting: no face of a convex object) may be
+      inset by ``rounding`` × that width, at most ρ; one whose centres span a plane of
+      their own (a concave face fitted as a plane) only as a part of a face fitted apart:
+      with no inset, and never more than ρ/2 inside ``P``'s ρ-offset (a U-block's hollow
+      lies inside by its depth, and stays).
 
     σ is the declared noise; ``detail`` is :data:`DETAIL_SIGMAS` × the median RMS scatter of
     the tip centres of the faces of six or more contacts about their planes, less the
