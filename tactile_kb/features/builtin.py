@@ -194,10 +194,37 @@ def _poly(model: ObjectModel, name: str) -> Polyhedron:
 
 
 def _uncertainty(model: ObjectModel) -> FloatArray:
-    """Per polyhedron face, the normal uncertainty (degrees) of its model face."""
+    """Per polyhedron face, the normal uncertainty (degrees) of its model face, with the
+    scatter of its tip centres pooled with the surface's (:func:`_pooled_scatter`)."""
     if not model.face_of:
         return np.zeros(0)
-    return np.asarray([model.faces[i].normal_uncertainty_deg for i in model.face_of], dtype=float)
+
+    def compute() -> FloatArray:
+        faces = [model.faces[i] for i in model.face_of]
+        surface = [f.residual for f in model.faces if f.refined and f.n_contacts >= 6]
+        detail = float(np.median(surface)) if surface else 0.0
+        out = []
+        for f in faces:
+            unc = f.normal_uncertainty_deg
+            m = f.n_contacts
+            if f.refined and m > 3 and f.residual > 0.0 and detail > 0.0:
+                own = f.residual * math.sqrt(m / (m - 3))  # σ of the fit, m − 3 dof
+                pooled = _pooled_scatter(own, m - 3, detail)
+                if pooled > own:
+                    unc = math.degrees(math.atan(math.tan(math.radians(unc)) * pooled / own))
+            out.append(unc)
+        return np.asarray(out, dtype=float)
+
+    return _derived(model, (__name__, current().features, "uncertainty"), compute)
+
+
+def _pooled_scatter(own: float, dof: int, surface: float) -> float:
+    """A face's scatter about its plane, ``own`` measured with ``dof`` degrees of freedom,
+    pooled with the surface's (``surface``: the median RMS of the faces touched six or more
+    times) as a prior worth :data:`RELIEF_DOF` degrees of freedom. A face touched five
+    times fits its plane with two degrees of freedom and may by chance show little of the
+    relief and noise the others show; its normal is then no more certain than theirs."""
+    return math.sqrt((dof * own**2 + RELIEF_DOF * surface**2) / (dof + RELIEF_DOF))
 
 
 def _tolerance(model: ObjectModel, tolerance_deg: float, sigmas: float) -> FloatArray:
@@ -644,6 +671,14 @@ def spread_bend(
     ``features.bend_sigma_rho`` × ρ and the centres' scatter about the bent fit (relief):
     infinite when the centres cannot show a bend at all (on two lines along ``u``, fewer
     than five)."""
+    found = _bend(model, face, anywhere)
+    return None if found is None else found[:2]
+
+
+def _bend(model: ObjectModel, face: int, anywhere: bool) -> tuple[float, float, float] | None:
+    """:func:`spread_bend`'s ``(turn, sigma)`` and the turn's standard error by the
+    jackknife (:func:`_jackknife_se`), when that is larger (a turn that rests on one or two
+    centres)."""
     spreads = _face_spreads(model)
     if (
         not 0 <= face < len(spreads)
@@ -680,25 +715,26 @@ def spread_bend(
         if on.sum() >= (1.0 - MAX_REJECTED) * len(on):  # else the face itself bends away
             c = c[on]
     if len(c) < 5 or float(np.linalg.norm(u_dir)) < 1e-9:
-        return 0.0, math.inf
+        return 0.0, math.inf, math.inf
     u_dir /= np.linalg.norm(u_dir)
     v_dir = np.cross(n, u_dir)
     c = c - c.mean(axis=0)
     u, v, h = c @ u_dir, c @ v_dir, c @ n
     width = float(np.ptp(u))
     if width <= 0:
-        return 0.0, math.inf
+        return 0.0, math.inf, math.inf
     us, vs = u / width, v / width  # well-conditioned unknowns
     plane = np.column_stack([np.ones_like(us), us, vs])
     q = us * us
     q_perp = q - plane @ np.linalg.lstsq(plane, q, rcond=None)[0]
     norm2 = float(q_perp @ q_perp)
     if norm2 <= 1e-12:
-        return 0.0, math.inf
+        return 0.0, math.inf, math.inf
     a = float(q_perp @ h) / norm2  # metres per (u/W)²: h ≈ a·(u/W)² + plane
     design = np.column_stack([plane, q])
     rest = h - design @ np.linalg.lstsq(design, h, rcond=None)[0]
     scatter = math.sqrt(float(rest @ rest) / (len(h) - 4))  # about the bent fit: relief
+    jack = _jackknife_se(design, rest)  # a's standard error, robust to a few stray centres
     # relief of height h (geometry.relief_rho × ρ) under the contacts, heights uniform in
     # [0, h]: σ = h/√12, pooled with the measured scatter as a prior worth RELIEF_DOF
     # degrees of freedom (a face touched a few times cannot show its own relief; one touched
@@ -714,10 +750,29 @@ def spread_bend(
     # convex: over ``whole`` no face turns by more than whole/ρ (a steeper fit is the noise's)
     bound = whole / rho
     turn = max(-bound, min(bound, -2.0 * a / width * k))
+    per_a = 2.0 / width * k  # radians of turn per metre of a
     return (
         math.degrees(turn),
-        math.degrees(2.0 * sigma / (width * math.sqrt(norm2)) * k),
+        math.degrees(sigma / math.sqrt(norm2) * per_a),
+        math.degrees(max(sigma / math.sqrt(norm2), jack) * per_a),
     )
+
+
+def _jackknife_se(design: FloatArray, rest: FloatArray) -> float:
+    """The jackknife standard error of the last coefficient of the least-squares fit whose
+    design matrix is ``design`` and residuals ``rest``: from the fits that leave out one row
+    each (closed form through the hat matrix). Unlike the error the residuals' scatter
+    implies, it grows when the coefficient rests on one or two centres (a bump or an edge's
+    touch at the end of a face's row of centres), as a bent fit of a flat face with relief
+    does. 0 when a row's leverage is 1 (the fit needs every row)."""
+    n = len(rest)
+    gram = np.linalg.pinv(design.T @ design)
+    lever = np.einsum("ij,jk,ik->i", design, gram, design)
+    if n < 2 or float(lever.max()) >= 1.0 - 1e-9:
+        return 0.0
+    # β − β₍ᵢ₎ = (XᵀX)⁻¹ xᵢ eᵢ / (1 − hᵢᵢ): the last coefficient of each
+    shift = (design @ gram[:, -1]) * rest / (1.0 - lever)
+    return math.sqrt((n - 1) / n * float(((shift - shift.mean()) ** 2).sum()))
 
 
 def _mad(r: FloatArray) -> float:
@@ -742,7 +797,9 @@ def _spread_evidence(model: ObjectModel, spread_deg: float) -> tuple[bool, int]:
     tell: ``(bent, folds)``.
 
     The face's tip centres measure its turn (:func:`spread_bend`). Beyond ``spread_deg`` by
-    two standard errors: ``bent``. Otherwise the spread is weak evidence where the centres
+    two standard errors, both the one the centres' scatter implies and the jackknife's (a
+    turn that rests on one or two centres, a bump's or an edge's touch at the end of a row,
+    is not established): ``bent``. Otherwise the spread is weak evidence where the centres
     cannot tell at all (on two lines, too few) or where their estimate itself reaches
     ``spread_deg`` (:func:`_leans`): the face counts as one gentle fold, as a smooth edge does
     (``folds``); an estimate below it is the sensors' quantisation (a flat face turned between
@@ -764,11 +821,11 @@ def _spread_evidence(model: ObjectModel, spread_deg: float) -> tuple[bool, int]:
                     if found is not None and _leans(*found, spread_deg):
                         folds += 1
                 continue
-            found = spread_bend(model, fi)
-            if found is None:
+            bend = _bend(model, fi, False)
+            if bend is None:
                 continue
-            turn, sigma = found
-            if outward(turn) - 2.0 * sigma > spread_deg:
+            turn, sigma, jack = bend
+            if outward(turn) - 2.0 * jack > spread_deg:
                 return True, folds  # measured: it turns by more than spread_deg
             if _leans(turn, sigma, spread_deg):
                 folds += 1  # the centres cannot tell: the sensors' weak evidence

@@ -940,6 +940,25 @@ def _signed_distance(x: FloatArray, normals: FloatArray, offsets: FloatArray) ->
     return np.asarray(np.where(inside, over.max(axis=1), np.linalg.norm(x - q, axis=1)))
 
 
+def _rounded_edge_planes(
+    over: FloatArray, normals: FloatArray, radii: FloatArray, rho: float
+) -> NDArray[np.intp]:
+    """The planes of the edge (or corner) whose rounding a tip centre may lie on: the plane
+    it lies furthest out of (``over``: its heights above each plane), with every plane ``B``
+    it lies against as a tip on the edge rounded with radius ``r`` does. Such a centre lies
+    at ``ρ + r`` from the rounding's axis, ``r`` inside both planes: above ``B`` by at least
+    ``(ρ + r)·cos β − r`` (β the angle between the two normals; r the smaller of the two
+    planes' ``radii``). Empty when the centre is above no plane by more than −ρ."""
+    a = int(np.argmax(over))
+    if over[a] < -rho:
+        return np.zeros(0, dtype=np.intp)
+    cos_b = normals @ normals[a]
+    r = np.minimum(radii, radii[a])
+    against = over >= np.minimum(-rho, (rho + r) * cos_b - r)
+    against[a] = True
+    return np.flatnonzero(against)
+
+
 SMOOTH_RHO = 0.01
 """Tip radii: a surface whose faces scatter by no more than this beyond the declared noise
 (the median RMS of the faces touched six or more times) shows no scan detail, and
@@ -974,12 +993,17 @@ def explained_faces(
     * ``e ≤ relief + detail + 3σ`` (bumps and relief lift a centre by at most their height,
       a scan's roughness by a few times the scatter the faces show), and
     * ``e ≥ −(inset + detail + 3σ)``: a tip on an edge rounded with radius ``r``, against
-      faces of ``P`` (within ρ of their planes) whose normals' mean is at most ψ from each
-      (at most 75°), lies up to ``inset = r·(1/cos ψ − 1)`` inside the sharp edge's ρ-offset
-      (``r(√2 − 1)`` at a box's edge), ``r`` being ``rounding`` × the width of the narrowest
-      of those faces; against one face the inset is 0. A face the touched object reaches
-      beyond (not supporting: no face of a convex object) may be inset by ``rounding`` ×
-      that width, at most ρ.
+      faces of ``P`` whose normals' mean is at most ψ from each (at most 75°), lies up to
+      ``inset = r·(1/cos ψ − 1)`` inside the sharp edge's ρ-offset (``r(√2 − 1)`` at a
+      box's edge), ``r`` being ``rounding`` × the width of the narrowest of those faces;
+      against one face the inset is 0. The faces a centre lies against are those of the
+      edge whose rounding it may be on (:func:`_rounded_edge_planes`: within ρ of their
+      planes, or as far inside them as a rounding of radius ``r`` puts a tip). A face the
+      touched object reaches beyond (not supporting: no face of a convex object) may be
+      inset by ``rounding`` × that width, at most ρ; one whose centres span a plane of
+      their own (a concave face fitted as a plane) only as a part of a face fitted apart:
+      with no inset, and never more than ρ/2 inside ``P``'s ρ-offset (a U-block's hollow
+      lies inside by its depth, and stays).
 
     σ is the declared noise; ``detail`` is :data:`DETAIL_SIGMAS` × the median RMS scatter of
     the tip centres of the faces of six or more contacts about their planes, less the
@@ -1044,8 +1068,11 @@ def explained_faces(
             key=lambda k: (faces[k].n_contacts, k),
         )
         for k in order:
-            if not supporting[k] and faces[k].refined:
-                continue  # a concave face explored as a plane (a U-block's hollow): a face
+            # a concave face explored as a plane (a U-block's hollow) lies inside the others'
+            # polyhedron by the hollow's depth: a face; one that lies on it within the
+            # surface's detail is a part of a face fitted apart (a top in two halves, one
+            # tilted a little out of the other's plane)
+            part = not supporting[k] and faces[k].refined
             others = [j for j in kept if j != k and supporting[j]]
             if len(others) < 4:
                 continue
@@ -1065,7 +1092,7 @@ def explained_faces(
                 continue  # only narrow faces around: a curved object's facets stay
             inset = np.zeros(len(c))
             for i in range(len(c)):
-                at = np.flatnonzero(near[i])
+                at = _rounded_edge_planes(over[i], poly.normals, rounding * widths, rho)
                 if not supporting[k] and len(at):
                     # a plane the touched object reaches beyond is no face of a convex
                     # object: a rounding as deep as any edge's of these faces explains it,
@@ -1079,6 +1106,8 @@ def explained_faces(
                 cos_psi = max(float((poly.normals[at] @ mean).min()), cos_cap)
                 inset[i] = rounding * float(widths[at].min()) * (1.0 / cos_psi - 1.0)
             slack = 3.0 * noise
+            if part:  # no rounding inset, and never a tip centre half its radius inside
+                inset = np.zeros(len(c)) - detail - slack + min(detail + slack, 0.5 * rho)
             if float(misfit.max()) <= relief + detail + slack and bool(
                 (misfit >= -(inset + detail + slack)).all()
             ):
