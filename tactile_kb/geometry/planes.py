@@ -340,34 +340,202 @@ def _split(
     tol: float,
     fit: FitFn,
     depth: int = 0,
+    scale: float = 0.0,
+    reach_deg: float = 90.0,
 ) -> list[NDArray[np.intp]]:
-    """Recursively split ``idx`` until each part's centres fit one plane within ``tol``."""
+    """Recursively split ``idx`` until each part's centres fit one plane within ``tol``.
+
+    The two parts are the best (least summed squared residuals) of k-planes iterations
+    (:func:`_kplanes`) started from several partitions (:func:`_two_plane_starts`). A part
+    that fits within ``tol`` still gives up the touches of an edge beside its face
+    (:func:`_edge_line`, with ``scale`` the least scale of the fits; none when 0).
+
+    A partition is taken only when each part's plane lies within ``reach_deg`` of every
+    sensor normal of its touches (a sensor fires only for a surface within its reach): the
+    centres of a face touched along one line fit a plane through that line at any tilt, and
+    with a few touches of another face they fit one that no sensor could have felt."""
     f = fit(idx)
-    if f.max_res <= tol or len(idx) < 2 or depth > 8:
+    if len(idx) < 2 or depth > 8:
         return [idx]
+    if f.max_res <= tol:
+        edge = _edge_line(idx, centres, normals, span_min, fit, scale) if scale > 0 else None
+        if edge is None:
+            edge = _stray_touches(idx, centres, span_min, f)
+            return [idx] if edge is None else [idx[~edge], idx[edge]]
+        rest = _split(idx[~edge], centres, normals, span_min, tol, fit, depth + 1, scale, reach_deg)
+        return [idx[edge], *rest]
     best: tuple[float, NDArray[np.bool_]] | None = None
-    sensor_mean = normals[idx].mean(axis=0)
-    for axis in (f.normal, sensor_mean / np.linalg.norm(sensor_mean)):
-        h = centres[idx] @ axis
-        order = np.argsort(h)
-        gaps = np.diff(h[order])
-        cut = int(np.argmax(gaps))
-        mask = np.zeros(len(idx), dtype=bool)
-        mask[order[cut + 1 :]] = True
-        mask = _kplanes(idx, mask, centres, normals, span_min)
+    cos_reach = math.cos(math.radians(reach_deg))
+    for start in _two_plane_starts(idx, centres, normals, f.normal):
+        mask = _kplanes(idx, start, centres, normals, span_min)
         if mask.all() or not mask.any():
             continue
-        a = fit(idx[mask])
-        b = fit(idx[~mask])
+        a, b = fit(idx[mask]), fit(idx[~mask])
+        if (
+            float((normals[idx[mask]] @ a.normal).min()) < cos_reach
+            or float((normals[idx[~mask]] @ b.normal).min()) < cos_reach
+        ):
+            continue
         score = _sse(a) + _sse(b)
         if best is None or score < best[0]:
             best = (score, mask)
     if best is None or best[0] >= 0.5 * _sse(f):
         return [idx]
     mask = best[1]
-    return _split(idx[mask], centres, normals, span_min, tol, fit, depth + 1) + _split(
-        idx[~mask], centres, normals, span_min, tol, fit, depth + 1
-    )
+    return _split(
+        idx[mask], centres, normals, span_min, tol, fit, depth + 1, scale, reach_deg
+    ) + _split(idx[~mask], centres, normals, span_min, tol, fit, depth + 1, scale, reach_deg)
+
+
+def _edge_line(
+    idx: NDArray[np.intp],
+    centres: FloatArray,
+    normals: FloatArray,
+    span_min: float,
+    fit: FitFn,
+    scale: float,
+) -> NDArray[np.bool_] | None:
+    """The centres of ``idx`` that touched an edge beside their face rather than the face, as
+    a mask, or None.
+
+    A tip resting on an edge has its centre nearer than ρ to the plane of either face, and
+    may fire the same sensor as the face's own touches: such touches along the edge (a
+    contour layer's corner, repeated at each height) can be more than the robust fit leaves
+    out (:data:`MAX_REJECTED`), and with the face's touches along one or two lines they
+    tilt its plane by degrees while fitting it within a fraction of a millimetre. They are
+    found among the two-plane partitions (:func:`_two_plane_starts`, :func:`_kplanes`):
+    the rest span a plane of their own, fitted within :data:`INSIDE_SIGMAS` × their scatter
+    (at least ``scale``), and these span none (one spot, or a line: the edge) and lie
+    inside that plane by more than :data:`INSIDE_SIGMAS` × that scatter, every one of them.
+    Whether they are an edge's touches or a narrow face of their own is left to the model
+    (:func:`edge_faces`)."""
+    if len(idx) < 5:
+        return None
+    f = fit(idx)
+    # the touches that fired another sensor than the rest, and (when one plane misses some
+    # centres by more than the least scale allows) the two-plane partitions
+    _, which = _unique_rows(np.round(normals[idx], 9))
+    masks = [which == k for k in range(int(which.max()) + 1)] if which.max() < 4 else []
+    if f.max_res > INSIDE_SIGMAS * scale:
+        for start in _two_plane_starts(idx, centres, normals, f.normal):
+            mask = _kplanes(idx, start, centres, normals, span_min)
+            masks += [mask, ~mask]
+    best: tuple[int, NDArray[np.bool_]] | None = None
+    for edge in masks:
+        if edge.all() or not edge.any() or (~edge).sum() < 3:
+            continue
+        face = fit(idx[~edge])
+        if not face.refined or fit(idx[edge]).refined:
+            continue
+        sigma = max(scale, _mad_sigma(face.residuals))
+        if face.max_res > INSIDE_SIGMAS * sigma:
+            continue
+        depth = centres[idx[edge]] @ face.normal - face.centre_offset
+        if float(depth.max()) >= -INSIDE_SIGMAS * sigma:
+            continue
+        if best is None or int(edge.sum()) < best[0]:
+            best = (int(edge.sum()), edge)
+    return None if best is None else best[1]
+
+
+_STRAY = 2
+"""At most this many touches off a line make a face of a line of touches and those (their
+plane is unchecked: :func:`_stray_touches`)."""
+
+
+def _stray_touches(
+    idx: NDArray[np.intp], centres: FloatArray, span_min: float, f: _Fit
+) -> NDArray[np.bool_] | None:
+    """The touches of ``idx`` that alone lift a line of touches into a plane, as a mask, or
+    None.
+
+    A face touched along one line (one contour pass) and, well off that line, at one or two
+    more points (``f`` refined only thanks to them) has a plane that nothing checks: two
+    points and a line fit a plane exactly, at whatever tilt their noise gives, and a touch
+    of the next face that the two-plane split left here tilts it by degrees. Those
+    :data:`_STRAY` or fewer touches are handed back as a group of their own: the line keeps
+    its sensors' normal, and each joins the face whose plane it lies on
+    (:func:`_merge_coplanar`), the same face again when that is the one."""
+    m = len(idx)
+    if not f.refined or m < _STRAY + 3:
+        return None
+    c = centres[idx]
+    stray = np.zeros(m, dtype=bool)
+    for _ in range(_STRAY):
+        rest = c[~stray]
+        mean = rest.mean(axis=0)
+        _, s, vt = np.linalg.svd(rest - mean, full_matrices=False)
+        if s[1] / math.sqrt(len(rest)) < span_min:
+            break
+        off = c - mean
+        across = np.linalg.norm(off - np.outer(off @ vt[0], vt[0]), axis=1)
+        across[stray] = -1.0
+        stray[int(np.argmax(across))] = True
+    else:
+        rest = c[~stray]
+        mean = rest.mean(axis=0)
+        _, s, vt = np.linalg.svd(rest - mean, full_matrices=False)
+        if s[1] / math.sqrt(len(rest)) >= span_min:
+            return None
+    if not stray.any():
+        return None
+    return stray
+
+
+_CUT_DIRECTIONS = 8
+"""In-plane directions along which :func:`_two_plane_starts` cuts a group's centres."""
+
+
+def _two_plane_starts(
+    idx: NDArray[np.intp], centres: FloatArray, normals: FloatArray, normal: FloatArray
+) -> list[NDArray[np.bool_]]:
+    """Partitions of the centres ``idx`` to start two-plane k-means from.
+
+    The widest gap along the fitted ``normal`` and along the sensors' mean normal (two
+    parallel faces at different offsets); and, for each of :data:`_CUT_DIRECTIONS`
+    directions in the fitted plane, the straight cut across it that leaves the two sides
+    with the least summed squared residuals about their own least-squares planes (two faces
+    meeting at a fold: their centres lie on either side of the fold line, and a plane
+    through both misses them by a V-shaped residual that no gap shows)."""
+    c = centres[idx]
+    m = len(c)
+    sensor_mean = normals[idx].mean(axis=0)
+    starts: list[NDArray[np.bool_]] = []
+    for axis in (normal, sensor_mean / np.linalg.norm(sensor_mean)):
+        h = c @ axis
+        order = np.argsort(h)
+        cut = int(np.argmax(np.diff(h[order])))
+        mask = np.zeros(m, dtype=bool)
+        mask[order[cut + 1 :]] = True
+        starts.append(mask)
+    if m < 6:
+        return starts
+    u = np.cross(normal, np.eye(3)[int(np.argmin(np.abs(normal)))])
+    u /= np.linalg.norm(u)
+    v = np.cross(normal, u)
+    x = c - c.mean(axis=0)
+    sizes = np.arange(1, m + 1, dtype=float)
+    for k in range(_CUT_DIRECTIONS):
+        a = math.pi * k / _CUT_DIRECTIONS
+        order = np.argsort(x @ (math.cos(a) * u + math.sin(a) * v), kind="stable")
+        s = x[order]
+        s1 = np.cumsum(s, axis=0)
+        s2 = np.cumsum(s[:, :, None] * s[:, None, :], axis=0)
+        # the first j + 1 centres against the other m - j - 1, each side at least three
+        j = np.arange(2, m - 3)
+        na, nb = sizes[j], m - sizes[j]
+        sa, sb = s1[j], s1[-1] - s1[j]
+        cov_a = s2[j] - sa[:, :, None] * sa[:, None, :] / na[:, None, None]
+        cov_b = (s2[-1] - s2[j]) - sb[:, :, None] * sb[:, None, :] / nb[:, None, None]
+        sse = np.linalg.eigvalsh(cov_a)[:, 0] + np.linalg.eigvalsh(cov_b)[:, 0]
+        best = int(j[int(np.argmin(sse))])
+        mask = np.zeros(m, dtype=bool)
+        mask[order[: best + 1]] = True
+        starts.append(mask)
+    unique: dict[bytes, NDArray[np.bool_]] = {}
+    for mask in starts:
+        unique.setdefault((mask if mask[0] else ~mask).tobytes(), mask)
+    return list(unique.values())
 
 
 def _kplanes(
@@ -606,10 +774,13 @@ def _faces_from_contacts(
     # the least scale of the robust face fits: the declared noise, or a flat face's detail
     scale = max(noise, current().geometry.robust_rho * rho)
     fit = _fitter(centres, normals, span_min, scale)
+    # a sensor fires for a surface within about one sensor spacing (twice the worst
+    # quantisation) of its direction
+    reach = 2.0 * merge_cone if merge_cone > 0 else current().geometry.max_refine_deg
     labels = _normal_clusters(normals[keep], cut)
     groups: list[NDArray[np.intp]] = []
     for lab in np.unique(labels):
-        groups += _split(keep[labels == lab], centres, normals, span_min, tol, fit)
+        groups += _split(keep[labels == lab], centres, normals, span_min, tol, fit, 0, scale, reach)
     groups = _merge_coplanar(groups, fit, tol, merge_deg, merge_cone, centres, scale)
     groups.sort(key=lambda g: int(g.min()))
     index = (
@@ -702,7 +873,10 @@ def _merge_coplanar(
         # candidate pairs (i < j, row by row) from one matrix product, each confirmed below
         unspanned = ~(refined[:, None] & refined[None, :])
         near = np.triu((cos >= cos_min - 1e-9) | (unspanned & (cos >= cos_loose - 1e-9)), 1)
-        for i, j in zip(*np.nonzero(near), strict=True):
+        pairs = list(zip(*np.nonzero(near), strict=True))
+        # a line joins a face that spans a plane before two lines join each other
+        pairs.sort(key=lambda ij: 2 - int(refined[ij[0]]) - int(refined[ij[1]]))
+        for i, j in pairs:
             both = np.concatenate([groups[i], groups[j]])
             joint = fit(both)
             if joint.max_res > tol:
