@@ -360,6 +360,13 @@ def _split(
     if f.max_res <= tol:
         edge = _edge_line(idx, centres, normals, span_min, fit, scale) if scale > 0 else None
         if edge is None:
+            fold = _fold(idx, centres, normals, span_min, fit, scale, reach_deg)
+            if fold is not None:
+                return _split(
+                    idx[fold], centres, normals, span_min, tol, fit, depth + 1, scale, reach_deg
+                ) + _split(
+                    idx[~fold], centres, normals, span_min, tol, fit, depth + 1, scale, reach_deg
+                )
             edge = _stray_touches(idx, centres, span_min, f)
             return [idx] if edge is None else [idx[~edge], idx[edge]]
         rest = _split(idx[~edge], centres, normals, span_min, tol, fit, depth + 1, scale, reach_deg)
@@ -435,6 +442,62 @@ def _edge_line(
             continue
         if best is None or int(edge.sum()) < best[0]:
             best = (int(edge.sum()), edge)
+    return None if best is None else best[1]
+
+
+FOLD_RATIO = 25.0
+"""Two planes explain a face's centres in place of one (:func:`_fold`) when their summed
+squared residuals are at most 1/this of the one plane's: 1/16 is what halving a curved
+patch gives (each half's sagitta a quarter of the whole's), so a curved face stays one."""
+
+
+def _fold(
+    idx: NDArray[np.intp],
+    centres: FloatArray,
+    normals: FloatArray,
+    span_min: float,
+    fit: FitFn,
+    scale: float,
+    reach_deg: float,
+) -> NDArray[np.bool_] | None:
+    """Two faces meeting at a fold in the centres ``idx`` that one plane fits within the split
+    tolerance, as the mask of one of them, or None.
+
+    Faces whose normals differ by less than about two sensor spacings can fire one sensor
+    (an icosahedron's, 41.8° apart, both fire the sensor between them), and where they are
+    touched near their common edge one plane passes within a millimetre or two of all their
+    centres. They are two faces when two planes fit them as well as the fits' least
+    ``scale`` allows (every centre within :data:`INSIDE_SIGMAS` × ``scale`` of its plane),
+    each spanned by four or more centres, with summed squared residuals at most
+    1/:data:`FOLD_RATIO` of the one plane's, each within ``reach_deg`` of its touches' sensor
+    normals, and the fold convex: each face's centres inside the other's plane (a concave
+    fold, the inside of an L-block, is left to the split tolerance)."""
+    f = fit(idx)
+    if scale <= 0 or len(idx) < 8 or f.max_res <= INSIDE_SIGMAS * scale:
+        return None
+    cos_reach = math.cos(math.radians(reach_deg))
+    best: tuple[float, NDArray[np.bool_]] | None = None
+    for start in _two_plane_starts(idx, centres, normals, f.normal):
+        mask = _kplanes(idx, start, centres, normals, span_min)
+        if mask.sum() < 4 or (~mask).sum() < 4:
+            continue
+        parts = (fit(idx[mask]), fit(idx[~mask]))
+        if not all(p.refined and p.max_res <= INSIDE_SIGMAS * scale for p in parts):
+            continue
+        if any(
+            float((normals[idx[m]] @ p.normal).min()) < cos_reach
+            for p, m in zip(parts, (mask, ~mask), strict=True)
+        ):
+            continue
+        # a convex fold: each face's centres lie inside the other's plane (two parallel lines of
+        # touches lie in one plane whatever faces they are on; a wrong pairing of them crosses)
+        a_in_b = centres[idx[mask]] @ parts[1].normal - parts[1].centre_offset
+        b_in_a = centres[idx[~mask]] @ parts[0].normal - parts[0].centre_offset
+        if max(float(a_in_b.max()), float(b_in_a.max())) > INSIDE_SIGMAS * scale:
+            continue
+        score = _sse(parts[0]) + _sse(parts[1])
+        if score * FOLD_RATIO <= _sse(f) and (best is None or score < best[0]):
+            best = (score, mask)
     return None if best is None else best[1]
 
 
