@@ -425,8 +425,10 @@ def _edge_line(
     masks = [which == k for k in range(int(which.max()) + 1)] if which.max() < 4 else []
     if f.max_res > INSIDE_SIGMAS * scale:
         for start in _two_plane_starts(idx, centres, normals, f.normal):
+            # the partition as cut too: k-planes lets a line's plane (its sensors' normal)
+            # take in the face's touches beside it
             mask = _kplanes(idx, start, centres, normals, span_min)
-            masks += [mask, ~mask]
+            masks += [mask, ~mask, start, ~start]
     best: tuple[int, NDArray[np.bool_]] | None = None
     for edge in masks:
         if edge.all() or not edge.any() or (~edge).sum() < 3:
@@ -836,7 +838,11 @@ def _faces_from_contacts(
         return []
     # the least scale of the robust face fits: the declared noise, or a flat face's detail
     scale = max(noise, current().geometry.robust_rho * rho)
-    fit = _fitter(centres, normals, span_min, scale)
+    fit = _exact_fitter(
+        _fitter(centres, normals, span_min, scale),
+        _fitter(centres, normals, min(span_min, NARROW_SPAN_SCALES * scale), scale),
+        scale,
+    )
     # a sensor fires for a surface within about one sensor spacing (twice the worst
     # quantisation) of its direction
     reach = 2.0 * merge_cone if merge_cone > 0 else current().geometry.max_refine_deg
@@ -886,6 +892,44 @@ def _faces_from_contacts(
             )
         )
     return out
+
+
+NARROW_SPAN_SCALES = 10.0
+"""Centres that lie on a plane within :data:`NARROW_SCALES` × the fits' least scale (no
+noise, no surface detail) span it when their spread across their line is this many least
+scales, below the ``span`` setting (:func:`_exact_fitter`)."""
+
+NARROW_SCALES = 2.0
+"""See :data:`NARROW_SPAN_SCALES`."""
+
+NARROW_MIN = 6
+"""Least number of centres a narrow span is trusted with (:func:`_exact_fitter`)."""
+
+
+def _exact_fitter(fit: FitFn, narrow: FitFn, scale: float) -> FitFn:
+    """``fit``, or where it does not refine a group, ``narrow`` (the same fit with a smaller
+    least span) when that refines it and the centres lie on their plane within
+    :data:`NARROW_SCALES` × ``scale`` (their scatter about it, with three degrees of freedom
+    taken by the plane), and there are at least :data:`NARROW_MIN` of them.
+
+    A face met by two passes a few millimetres apart (an undercut touched with the head
+    indexed, a small face near an apex) spans a plane of its own: exact touches fix its
+    normal to a fraction of a degree over a millimetre or two, where the sensors leave it
+    to half a sensor spacing. The ``span`` setting guards against noise and surface detail;
+    where the centres show neither, it need not."""
+
+    def best(idx: NDArray[np.intp]) -> _Fit:
+        f = fit(idx)
+        if f.refined:
+            return f
+        if len(idx) < NARROW_MIN:
+            return f  # three to five centres fit a plane whatever surface they lie on
+        g = narrow(idx)
+        if g.refined and math.sqrt(_sse(g) / (len(idx) - 3)) <= NARROW_SCALES * scale:
+            return g
+        return f
+
+    return best
 
 
 @functools.lru_cache(maxsize=8)
