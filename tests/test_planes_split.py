@@ -154,3 +154,29 @@ def test_stray_touches_of_the_next_face_do_not_tilt_a_line() -> None:
     n_a, n_b = len(a_contacts), len(b_contacts)
     assert set(range(n_a, n_a + n_b + 2)) <= set(b_face.contacts)
     assert _angle(b_face.normal, nb) < 0.01
+
+
+@pytest.mark.parametrize(("noise", "refined"), [(0.0, True), (0.0005, False)])
+def test_exact_touches_span_a_face_over_a_narrow_spread(noise: float, refined: bool) -> None:
+    # A face 25° below the horizontal touched by two passes whose tip centres lie 2.5 mm
+    # apart across their lines (1.2 mm RMS, under the 2 mm the `span` setting asks of noisy
+    # touches) by a sensor 10° off its normal: exact touches fit its plane; with 0.5 mm of
+    # declared noise the sensor's normal stands.
+    a = math.radians(25.0)
+    n = _unit((math.cos(a), 0.0, -math.sin(a)))
+    along = _unit(np.cross(n, [0.0, 1.0, 0.0]))
+    pts = [
+        np.array([0.02, 0.0, 0.01]) + t * along + np.array([0.0, y, 0.0])
+        for t in (0.0, 0.0025)
+        for y in np.linspace(-0.01, 0.01, 5)
+    ]
+    d = -_unit((math.cos(math.radians(15.0)), 0.0, -math.sin(math.radians(15.0))))
+    faces = [
+        f for f in merge_planes(_record(_contacts(n, np.asarray(pts), d), noise)) if f.contacts
+    ]
+    assert len(faces) == 1
+    assert faces[0].refined is refined
+    if refined:
+        assert _angle(faces[0].normal, n) < 0.01
+    else:
+        assert _angle(faces[0].normal, n) > 5.0

@@ -39,3 +39,28 @@ def test_icosahedron_whose_layers_met_two_faces_per_sensor(pose: int, turn: floa
     for f in r.model.contact_faces:
         k = int(np.argmax(truth @ f.normal_array))
         assert math.degrees(math.acos(min(1.0, float(truth[k] @ f.normal_array)))) < 5.0
+
+
+def _pyramid(n: int, r: float, h: float, turn0: float, pose: int, turn: float) -> trimesh.Trimesh:
+    m = solids.rotate_about_z(solids.pyramid(n, r, h), turn0)
+    posed = solids.stable_poses(m, min_probability=0.02)[pose][0]
+    return solids.rotate_about_z(posed, turn)
+
+
+@pytest.mark.parametrize(
+    ("n", "r", "h", "turn0", "pose", "turn"),
+    [
+        (4, 0.0145, 0.02, 312.8, 1, 178.7658097675871),
+        (6, 0.0315, 0.0405, 357.8, 2, 152.14622271292123),
+        (6, 0.0315, 0.0405, 357.8, 4, 31.25335399736189),
+    ],
+)
+def test_lying_pyramid_whose_faces_were_touched_at_close_heights(
+    n: int, r: float, h: float, turn0: float, pose: int, turn: float
+) -> None:
+    # Lying on a side, the faces under the pyramid and beside its apex are met by passes a
+    # millimetre or two apart, and along a layer's corner by the tip resting on an edge:
+    # exact touches still fix their planes, and the lateral edges meet at the apex.
+    mesh = _pyramid(n, r, h, turn0, pose, turn)
+    result = classify(mesh, rules="polyhedra", noise=0.0, seed=1)
+    assert result.decision.label == "pyramid"
