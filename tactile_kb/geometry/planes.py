@@ -18,6 +18,13 @@ build dozens of sliver faces. :func:`merge_planes` turns the contacts of a recor
    plane the others share (the tip touched an edge or a vertex beside the face, so its
    centre is nearer than ρ to the face's plane) are found by soft-L1 reweighting and left
    out (:data:`INSIDE_SIGMAS`), unless that would leave out more than a quarter of them.
+   The k-planes iterations start from gaps along the normal and from straight cuts across
+   the face (:func:`_two_plane_starts`). A cluster that fits one plane within ``split_tol``
+   still splits where two planes meeting at a convex fold fit it as exactly as the noise
+   allows (two faces of an icosahedron, one per contour layer, that fired one sensor:
+   :func:`_fold`), gives up a line of touches of an edge beside its face (:func:`_edge_line`)
+   and the one or two touches that alone lift a line into a plane (:func:`_stray_touches`).
+   Exact centres span a plane over a narrower spread than noisy ones (:func:`_exact_fitter`).
 3. **Merge coplanar faces** (a face whose contacts fired two neighbouring sensors).
 4. **Add the table**: "the equation of the support plane is the same as the equation of the
    polyhedron's supported surface", so the plane z = 0 with outward normal (0, 0, −1) is a
@@ -65,8 +72,12 @@ __all__ = [
     "EDGE_MIN_WIDTH",
     "EDGE_ROUNDING",
     "EDGE_SIGMAS",
+    "FOLD_RATIO",
     "INSIDE_SIGMAS",
     "MAX_REJECTED",
+    "NARROW_MIN",
+    "NARROW_SCALES",
+    "NARROW_SPAN_SCALES",
     "OUTSIDE_SIGMAS",
     "SMOOTH_RHO",
     "TABLE_TOL",
