@@ -328,6 +328,23 @@ def _sse(f: _Fit) -> float:
 FitFn = Callable[[NDArray[np.intp]], _Fit]
 
 
+def _spread(c: FloatArray) -> float:
+    """RMS spread (m) of the points ``c`` across their best line (0 for one point)."""
+    if len(c) < 2:
+        return 0.0
+    s = np.linalg.svd(c - c.mean(axis=0), compute_uv=False)
+    return float(s[1] / math.sqrt(len(c))) if len(s) > 1 else 0.0
+
+
+def _least_sse(c: FloatArray) -> float:
+    """The least summed squared distance of the points ``c`` from any plane (0 for three or
+    fewer): a lower bound of :func:`_sse` of any fit of them, cheap to screen partitions."""
+    if len(c) <= 3:
+        return 0.0
+    s = np.linalg.svd(c - c.mean(axis=0), compute_uv=False)
+    return float(s[2] ** 2)
+
+
 def _fitter(centres: FloatArray, normals: FloatArray, span_min: float, scale: float = 0.0) -> FitFn:
     """``_fit`` of a group of contact indices, computed once per group (keyed by its indices);
     robust (:func:`_robust_plane`, least scale ``scale``) when ``scale`` is positive."""
@@ -369,9 +386,19 @@ def _split(
     if len(idx) < 2 or depth > 8:
         return [idx]
     if f.max_res <= tol:
-        edge = _edge_line(idx, centres, normals, span_min, fit, scale) if scale > 0 else None
+        # the two-plane partitions, once for both looks (only where one plane misses some
+        # centres by more than the least scale allows)
+        pairs = (
+            [
+                (start, _kplanes(idx, start, centres, normals, span_min))
+                for start in _two_plane_starts(idx, centres, normals, f.normal)
+            ]
+            if scale > 0 and len(idx) >= 5 and f.max_res > INSIDE_SIGMAS * scale
+            else []
+        )
+        edge = _edge_line(idx, centres, normals, span_min, fit, scale, pairs) if scale > 0 else None
         if edge is None:
-            fold = _fold(idx, centres, normals, span_min, fit, scale, reach_deg)
+            fold = _fold(idx, normals, centres, fit, scale, reach_deg, pairs)
             if fold is not None:
                 return _split(
                     idx[fold], centres, normals, span_min, tol, fit, depth + 1, scale, reach_deg
@@ -388,6 +415,8 @@ def _split(
         mask = _kplanes(idx, start, centres, normals, span_min)
         if mask.all() or not mask.any():
             continue
+        if _least_sse(centres[idx[mask]]) + _least_sse(centres[idx[~mask]]) >= 0.5 * _sse(f):
+            continue  # no fit of the two parts can split it (below)
         a, b = fit(idx[mask]), fit(idx[~mask])
         if (
             float((normals[idx[mask]] @ a.normal).min()) < cos_reach
@@ -412,6 +441,7 @@ def _edge_line(
     span_min: float,
     fit: FitFn,
     scale: float,
+    pairs: Sequence[tuple[NDArray[np.bool_], NDArray[np.bool_]]],
 ) -> NDArray[np.bool_] | None:
     """The centres of ``idx`` that touched an edge beside their face rather than the face, as
     a mask, or None.
@@ -421,7 +451,8 @@ def _edge_line(
     contour layer's corner, repeated at each height) can be more than the robust fit leaves
     out (:data:`MAX_REJECTED`), and with the face's touches along one or two lines they
     tilt its plane by degrees while fitting it within a fraction of a millimetre. They are
-    found among the two-plane partitions (:func:`_two_plane_starts`, :func:`_kplanes`):
+    found among the two-plane partitions (:func:`_two_plane_starts`, :func:`_kplanes`),
+    at most half of the touches and spread across their line by less than ``span_min``:
     the rest span a plane of their own, fitted within :data:`INSIDE_SIGMAS` × their scatter
     (at least ``scale``), and these span none (one spot, or a line: the edge) and lie
     inside that plane by more than :data:`INSIDE_SIGMAS` × that scatter, every one of them.
@@ -429,23 +460,25 @@ def _edge_line(
     (:func:`edge_faces`)."""
     if len(idx) < 5:
         return None
-    f = fit(idx)
-    # the touches that fired another sensor than the rest, and (when one plane misses some
-    # centres by more than the least scale allows) the two-plane partitions
+    # the touches that fired another sensor than the rest, and the two-plane partitions
+    # (``pairs``: each start and where k-planes took it), as cut too: k-planes lets a line's
+    # plane (its sensors' normal) take in the face's touches beside it
     _, which = _unique_rows(np.round(normals[idx], 9))
     masks = [which == k for k in range(int(which.max()) + 1)] if which.max() < 4 else []
-    if f.max_res > INSIDE_SIGMAS * scale:
-        for start in _two_plane_starts(idx, centres, normals, f.normal):
-            # the partition as cut too: k-planes lets a line's plane (its sensors' normal)
-            # take in the face's touches beside it
-            mask = _kplanes(idx, start, centres, normals, span_min)
-            masks += [mask, ~mask, start, ~start]
+    for start, mask in pairs:
+        masks += [mask, ~mask, start, ~start]
     best: tuple[int, NDArray[np.bool_]] | None = None
+    seen: set[bytes] = set()
     for edge in masks:
-        if edge.all() or not edge.any() or (~edge).sum() < 3:
+        if edge.all() or not edge.any() or (~edge).sum() < 3 or edge.tobytes() in seen:
+            continue
+        seen.add(edge.tobytes())
+        if edge.sum() > (~edge).sum() or _spread(centres[idx[edge]]) >= span_min:
+            continue  # an edge is touched in passing, along a line: not most of a face
+        if fit(idx[edge]).refined:
             continue
         face = fit(idx[~edge])
-        if not face.refined or fit(idx[edge]).refined:
+        if not face.refined:
             continue
         sigma = max(scale, _mad_sigma(face.residuals))
         if face.max_res > INSIDE_SIGMAS * sigma:
@@ -466,12 +499,12 @@ patch gives (each half's sagitta a quarter of the whole's), so a curved face sta
 
 def _fold(
     idx: NDArray[np.intp],
-    centres: FloatArray,
     normals: FloatArray,
-    span_min: float,
+    centres: FloatArray,
     fit: FitFn,
     scale: float,
     reach_deg: float,
+    pairs: Sequence[tuple[NDArray[np.bool_], NDArray[np.bool_]]],
 ) -> NDArray[np.bool_] | None:
     """Two faces meeting at a fold in the centres ``idx`` that one plane fits within the split
     tolerance, as the mask of one of them, or None.
@@ -484,16 +517,20 @@ def _fold(
     each spanned by four or more centres, with summed squared residuals at most
     1/:data:`FOLD_RATIO` of the one plane's, each within ``reach_deg`` of its touches' sensor
     normals, and the fold convex: each face's centres inside the other's plane (a concave
-    fold, the inside of an L-block, is left to the split tolerance)."""
+    fold, the inside of an L-block, is left to the split tolerance). ``pairs`` are the
+    two-plane partitions (:func:`_two_plane_starts`, each with where :func:`_kplanes` took
+    it)."""
     f = fit(idx)
     if scale <= 0 or len(idx) < 8 or f.max_res <= INSIDE_SIGMAS * scale:
         return None
     cos_reach = math.cos(math.radians(reach_deg))
     best: tuple[float, NDArray[np.bool_]] | None = None
-    for start in _two_plane_starts(idx, centres, normals, f.normal):
-        mask = _kplanes(idx, start, centres, normals, span_min)
+    for _, mask in pairs:
         if mask.sum() < 4 or (~mask).sum() < 4:
             continue
+        least = _least_sse(centres[idx[mask]]) + _least_sse(centres[idx[~mask]])
+        if least * FOLD_RATIO > _sse(f):
+            continue  # no fit of the two parts explains the centres well enough (below)
         parts = (fit(idx[mask]), fit(idx[~mask]))
         if not all(p.refined and p.max_res <= INSIDE_SIGMAS * scale for p in parts):
             continue
