@@ -328,14 +328,6 @@ def _sse(f: _Fit) -> float:
 FitFn = Callable[[NDArray[np.intp]], _Fit]
 
 
-def _spread(c: FloatArray) -> float:
-    """RMS spread (m) of the points ``c`` across their best line (0 for one point)."""
-    if len(c) < 2:
-        return 0.0
-    s = np.linalg.svd(c - c.mean(axis=0), compute_uv=False)
-    return float(s[1] / math.sqrt(len(c))) if len(s) > 1 else 0.0
-
-
 def _least_sse(c: FloatArray) -> float:
     """The least summed squared distance of the points ``c`` from any plane (0 for three or
     fewer): a lower bound of :func:`_sse` of any fit of them, cheap to screen partitions."""
@@ -396,7 +388,7 @@ def _split(
             if scale > 0 and len(idx) >= 5 and f.max_res > INSIDE_SIGMAS * scale
             else []
         )
-        edge = _edge_line(idx, centres, normals, span_min, fit, scale, pairs) if scale > 0 else None
+        edge = _edge_line(idx, centres, normals, fit, scale, pairs) if scale > 0 else None
         if edge is None:
             fold = _fold(idx, normals, centres, fit, scale, reach_deg, pairs)
             if fold is not None:
@@ -438,7 +430,6 @@ def _edge_line(
     idx: NDArray[np.intp],
     centres: FloatArray,
     normals: FloatArray,
-    span_min: float,
     fit: FitFn,
     scale: float,
     pairs: Sequence[tuple[NDArray[np.bool_], NDArray[np.bool_]]],
@@ -451,8 +442,7 @@ def _edge_line(
     contour layer's corner, repeated at each height) can be more than the robust fit leaves
     out (:data:`MAX_REJECTED`), and with the face's touches along one or two lines they
     tilt its plane by degrees while fitting it within a fraction of a millimetre. They are
-    found among the two-plane partitions (:func:`_two_plane_starts`, :func:`_kplanes`),
-    at most half of the touches and spread across their line by less than ``span_min``:
+    found among the two-plane partitions (:func:`_two_plane_starts`, :func:`_kplanes`):
     the rest span a plane of their own, fitted within :data:`INSIDE_SIGMAS` × their scatter
     (at least ``scale``), and these span none (one spot, or a line: the edge) and lie
     inside that plane by more than :data:`INSIDE_SIGMAS` × that scatter, every one of them.
@@ -473,8 +463,6 @@ def _edge_line(
         if edge.all() or not edge.any() or (~edge).sum() < 3 or edge.tobytes() in seen:
             continue
         seen.add(edge.tobytes())
-        if edge.sum() > (~edge).sum() or _spread(centres[idx[edge]]) >= span_min:
-            continue  # an edge is touched in passing, along a line: not most of a face
         if fit(idx[edge]).refined:
             continue
         face = fit(idx[~edge])
