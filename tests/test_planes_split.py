@@ -102,9 +102,10 @@ def test_two_faces_of_one_sensor_across_a_ridge_are_two_faces(half_deg: float) -
 
 def test_touches_of_an_edge_with_their_own_sensor_do_not_tilt_the_face() -> None:
     # A face (normal tilted 20° down) touched along two close horizontal lines by the
-    # horizontal sensor, and along its upper edge by the sensor 15° below the horizontal: the
-    # tip resting on the edge has its centre 1 mm inside the face's plane. The face keeps its
-    # own plane; the edge's touches are left out of it.
+    # horizontal sensor, and twice at each of two places on its upper edge (the layers'
+    # corners) by the sensor 15° below the horizontal: the tip resting on the edge has its
+    # centre 1 mm inside the face's plane. The face keeps its own plane; the edge's touches
+    # are left out of it.
     a = math.radians(20.0)
     n = _unit((math.cos(a), 0.0, -math.sin(a)))
     along = _unit(np.cross(n, [0.0, 1.0, 0.0]))
@@ -117,7 +118,7 @@ def test_touches_of_an_edge_with_their_own_sensor_do_not_tilt_the_face() -> None
     b = math.radians(15.0)
     edge_dir = _unit((-math.cos(b), 0.0, -math.sin(b)))
     top = base + 0.015 * along
-    edge_pts = [top + np.array([0.0, y, 0.0]) - 0.001 * n for y in (-0.012, -0.004, 0.004, 0.012)]
+    edge_pts = [top + np.array([0.0, y, 0.0]) - 0.001 * n for y in (-0.01, -0.01, 0.01, 0.01)]
     edge = _contacts(n, np.asarray(edge_pts), edge_dir, len(face))
     faces = [f for f in merge_planes(_record(face + edge)) if f.source == "contacts"]
     main = max(faces, key=lambda f: len(set(f.contacts) & set(range(len(face)))))

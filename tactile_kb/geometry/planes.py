@@ -72,6 +72,7 @@ __all__ = [
     "EDGE_MIN_WIDTH",
     "EDGE_ROUNDING",
     "EDGE_SIGMAS",
+    "EDGE_SPOTS",
     "FOLD_RATIO",
     "INSIDE_SIGMAS",
     "MAX_REJECTED",
@@ -442,8 +443,8 @@ def _edge_line(
     contour layer's corner, repeated at each height) can be more than the robust fit leaves
     out (:data:`MAX_REJECTED`), and with the face's touches along one or two lines they
     tilt its plane by degrees while fitting it within a fraction of a millimetre. They are
-    found among the two-plane partitions (:func:`_two_plane_starts`, :func:`_kplanes`):
-    the rest span a plane of their own, fitted within :data:`INSIDE_SIGMAS` × their scatter
+    found among the two-plane partitions (:func:`_two_plane_starts`, :func:`_kplanes`),
+    at no more than :data:`EDGE_SPOTS` places (ten least scales apart): the rest span a plane of their own, fitted within :data:`INSIDE_SIGMAS` × their scatter
     (at least ``scale``), and these span none (one spot, or a line: the edge) and lie
     inside that plane by more than :data:`INSIDE_SIGMAS` × that scatter, every one of them.
     Whether they are an edge's touches or a narrow face of their own is left to the model
@@ -463,6 +464,8 @@ def _edge_line(
         if edge.all() or not edge.any() or (~edge).sum() < 3 or edge.tobytes() in seen:
             continue
         seen.add(edge.tobytes())
+        if _spots(centres[idx[edge]], 10.0 * scale) > EDGE_SPOTS:
+            continue  # a line of many touches is a face explored, not an edge met in passing
         if fit(idx[edge]).refined:
             continue
         face = fit(idx[~edge])
@@ -581,6 +584,22 @@ def _stray_touches(
     if not stray.any():
         return None
     return stray
+
+
+EDGE_SPOTS = 3
+"""An edge beside a face is met in passing, at a contour layer's corner or by a short slide:
+its touches lie at no more than this many distinct places (:func:`_edge_line`); a line of
+more is a face of its own (a low-poly cylinder's next facet)."""
+
+
+def _spots(c: FloatArray, radius: float) -> int:
+    """How many places the points ``c`` lie at: each point further than ``radius`` from
+    every earlier place starts a new one."""
+    places: list[FloatArray] = []
+    for p in c:
+        if all(float(np.linalg.norm(p - q)) > radius for q in places):
+            places.append(p)
+    return len(places)
 
 
 _CUT_DIRECTIONS = 8
