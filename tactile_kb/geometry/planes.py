@@ -18,6 +18,13 @@ build dozens of sliver faces. :func:`merge_planes` turns the contacts of a recor
    plane the others share (the tip touched an edge or a vertex beside the face, so its
    centre is nearer than ρ to the face's plane) are found by soft-L1 reweighting and left
    out (:data:`INSIDE_SIGMAS`), unless that would leave out more than a quarter of them.
+   The k-planes iterations start from gaps along the normal and from straight cuts across
+   the face (:func:`_two_plane_starts`). A cluster that fits one plane within ``split_tol``
+   still splits where two planes meeting at a convex fold fit it as exactly as the noise
+   allows (two faces of an icosahedron, one per contour layer, that fired one sensor:
+   :func:`_fold`), gives up a line of touches of an edge beside its face (:func:`_edge_line`)
+   and the one or two touches that alone lift a line into a plane (:func:`_stray_touches`).
+   Exact centres span a plane over a narrower spread than noisy ones (:func:`_exact_fitter`).
 3. **Merge coplanar faces** (a face whose contacts fired two neighbouring sensors).
 4. **Add the table**: "the equation of the support plane is the same as the equation of the
    polyhedron's supported surface", so the plane z = 0 with outward normal (0, 0, −1) is a
@@ -65,8 +72,13 @@ __all__ = [
     "EDGE_MIN_WIDTH",
     "EDGE_ROUNDING",
     "EDGE_SIGMAS",
+    "EDGE_SPOTS",
+    "FOLD_RATIO",
     "INSIDE_SIGMAS",
     "MAX_REJECTED",
+    "NARROW_MIN",
+    "NARROW_SCALES",
+    "NARROW_SPAN_SCALES",
     "OUTSIDE_SIGMAS",
     "SMOOTH_RHO",
     "TABLE_TOL",
@@ -317,6 +329,15 @@ def _sse(f: _Fit) -> float:
 FitFn = Callable[[NDArray[np.intp]], _Fit]
 
 
+def _least_sse(c: FloatArray) -> float:
+    """The least summed squared distance of the points ``c`` from any plane (0 for three or
+    fewer): a lower bound of :func:`_sse` of any fit of them, cheap to screen partitions."""
+    if len(c) <= 3:
+        return 0.0
+    s = np.linalg.svd(c - c.mean(axis=0), compute_uv=False)
+    return float(s[2] ** 2)
+
+
 def _fitter(centres: FloatArray, normals: FloatArray, span_min: float, scale: float = 0.0) -> FitFn:
     """``_fit`` of a group of contact indices, computed once per group (keyed by its indices);
     robust (:func:`_robust_plane`, least scale ``scale``) when ``scale`` is positive."""
@@ -340,34 +361,301 @@ def _split(
     tol: float,
     fit: FitFn,
     depth: int = 0,
+    scale: float = 0.0,
+    reach_deg: float = 90.0,
 ) -> list[NDArray[np.intp]]:
-    """Recursively split ``idx`` until each part's centres fit one plane within ``tol``."""
+    """Recursively split ``idx`` until each part's centres fit one plane within ``tol``.
+
+    The two parts are the best (least summed squared residuals) of k-planes iterations
+    (:func:`_kplanes`) started from several partitions (:func:`_two_plane_starts`). A part
+    that fits within ``tol`` still gives up the touches of an edge beside its face
+    (:func:`_edge_line`, with ``scale`` the least scale of the fits; none when 0).
+
+    A partition is taken only when each part's plane lies within ``reach_deg`` of every
+    sensor normal of its touches (a sensor fires only for a surface within its reach): the
+    centres of a face touched along one line fit a plane through that line at any tilt, and
+    with a few touches of another face they fit one that no sensor could have felt."""
     f = fit(idx)
-    if f.max_res <= tol or len(idx) < 2 or depth > 8:
+    if len(idx) < 2 or depth > 8:
         return [idx]
+    if f.max_res <= tol:
+        # the two-plane partitions, once for both looks (only where one plane misses some
+        # centres by more than the least scale allows)
+        pairs = (
+            [
+                (start, _kplanes(idx, start, centres, normals, span_min))
+                for start in _two_plane_starts(idx, centres, normals, f.normal)
+            ]
+            if scale > 0 and len(idx) >= 5 and f.max_res > INSIDE_SIGMAS * scale
+            else []
+        )
+        edge = _edge_line(idx, centres, normals, fit, scale, pairs) if scale > 0 else None
+        if edge is None:
+            fold = _fold(idx, normals, centres, fit, scale, reach_deg, pairs)
+            if fold is not None:
+                return _split(
+                    idx[fold], centres, normals, span_min, tol, fit, depth + 1, scale, reach_deg
+                ) + _split(
+                    idx[~fold], centres, normals, span_min, tol, fit, depth + 1, scale, reach_deg
+                )
+            edge = _stray_touches(idx, centres, span_min, f)
+            return [idx] if edge is None else [idx[~edge], idx[edge]]
+        rest = _split(idx[~edge], centres, normals, span_min, tol, fit, depth + 1, scale, reach_deg)
+        return [idx[edge], *rest]
     best: tuple[float, NDArray[np.bool_]] | None = None
-    sensor_mean = normals[idx].mean(axis=0)
-    for axis in (f.normal, sensor_mean / np.linalg.norm(sensor_mean)):
-        h = centres[idx] @ axis
-        order = np.argsort(h)
-        gaps = np.diff(h[order])
-        cut = int(np.argmax(gaps))
-        mask = np.zeros(len(idx), dtype=bool)
-        mask[order[cut + 1 :]] = True
-        mask = _kplanes(idx, mask, centres, normals, span_min)
+    cos_reach = math.cos(math.radians(reach_deg))
+    for start in _two_plane_starts(idx, centres, normals, f.normal):
+        mask = _kplanes(idx, start, centres, normals, span_min)
         if mask.all() or not mask.any():
             continue
-        a = fit(idx[mask])
-        b = fit(idx[~mask])
+        if _least_sse(centres[idx[mask]]) + _least_sse(centres[idx[~mask]]) >= 0.5 * _sse(f):
+            continue  # no fit of the two parts can split it (below)
+        a, b = fit(idx[mask]), fit(idx[~mask])
+        if (
+            float((normals[idx[mask]] @ a.normal).min()) < cos_reach
+            or float((normals[idx[~mask]] @ b.normal).min()) < cos_reach
+        ):
+            continue
         score = _sse(a) + _sse(b)
         if best is None or score < best[0]:
             best = (score, mask)
     if best is None or best[0] >= 0.5 * _sse(f):
         return [idx]
     mask = best[1]
-    return _split(idx[mask], centres, normals, span_min, tol, fit, depth + 1) + _split(
-        idx[~mask], centres, normals, span_min, tol, fit, depth + 1
-    )
+    return _split(
+        idx[mask], centres, normals, span_min, tol, fit, depth + 1, scale, reach_deg
+    ) + _split(idx[~mask], centres, normals, span_min, tol, fit, depth + 1, scale, reach_deg)
+
+
+def _edge_line(
+    idx: NDArray[np.intp],
+    centres: FloatArray,
+    normals: FloatArray,
+    fit: FitFn,
+    scale: float,
+    pairs: Sequence[tuple[NDArray[np.bool_], NDArray[np.bool_]]],
+) -> NDArray[np.bool_] | None:
+    """The centres of ``idx`` that touched an edge beside their face rather than the face, as
+    a mask, or None.
+
+    A tip resting on an edge has its centre nearer than ρ to the plane of either face, and
+    may fire the same sensor as the face's own touches: such touches along the edge (a
+    contour layer's corner, repeated at each height) can be more than the robust fit leaves
+    out (:data:`MAX_REJECTED`), and with the face's touches along one or two lines they
+    tilt its plane by degrees while fitting it within a fraction of a millimetre. They are
+    found among the two-plane partitions (:func:`_two_plane_starts`, :func:`_kplanes`),
+    at no more than :data:`EDGE_SPOTS` places (ten least scales apart): the rest span a plane of their own, fitted within :data:`INSIDE_SIGMAS` × their scatter
+    (at least ``scale``), and these span none (one spot, or a line: the edge) and lie
+    inside that plane by more than :data:`INSIDE_SIGMAS` × that scatter, every one of them.
+    Whether they are an edge's touches or a narrow face of their own is left to the model
+    (:func:`edge_faces`)."""
+    if len(idx) < 5:
+        return None
+    # the touches that fired another sensor than the rest, and the two-plane partitions
+    # (``pairs``: each start and where k-planes took it), as cut too: k-planes lets a line's
+    # plane (its sensors' normal) take in the face's touches beside it
+    _, which = _unique_rows(np.round(normals[idx], 9))
+    masks = [which == k for k in range(int(which.max()) + 1)] if which.max() < 4 else []
+    for start, mask in pairs:
+        masks += [mask, ~mask, start, ~start]
+    best: tuple[int, NDArray[np.bool_]] | None = None
+    seen: set[bytes] = set()
+    for edge in masks:
+        if edge.all() or not edge.any() or (~edge).sum() < 3 or edge.tobytes() in seen:
+            continue
+        seen.add(edge.tobytes())
+        if _spots(centres[idx[edge]], 10.0 * scale) > EDGE_SPOTS:
+            continue  # a line of many touches is a face explored, not an edge met in passing
+        if fit(idx[edge]).refined:
+            continue
+        face = fit(idx[~edge])
+        if not face.refined:
+            continue
+        sigma = max(scale, _mad_sigma(face.residuals))
+        if face.max_res > INSIDE_SIGMAS * sigma:
+            continue
+        depth = centres[idx[edge]] @ face.normal - face.centre_offset
+        if float(depth.max()) >= -INSIDE_SIGMAS * sigma:
+            continue
+        if best is None or int(edge.sum()) < best[0]:
+            best = (int(edge.sum()), edge)
+    return None if best is None else best[1]
+
+
+FOLD_RATIO = 25.0
+"""Two planes explain a face's centres in place of one (:func:`_fold`) when their summed
+squared residuals are at most 1/this of the one plane's: 1/16 is what halving a curved
+patch gives (each half's sagitta a quarter of the whole's), so a curved face stays one."""
+
+
+def _fold(
+    idx: NDArray[np.intp],
+    normals: FloatArray,
+    centres: FloatArray,
+    fit: FitFn,
+    scale: float,
+    reach_deg: float,
+    pairs: Sequence[tuple[NDArray[np.bool_], NDArray[np.bool_]]],
+) -> NDArray[np.bool_] | None:
+    """Two faces meeting at a fold in the centres ``idx`` that one plane fits within the split
+    tolerance, as the mask of one of them, or None.
+
+    Faces whose normals differ by less than about two sensor spacings can fire one sensor
+    (an icosahedron's, 41.8° apart, both fire the sensor between them), and where they are
+    touched near their common edge one plane passes within a millimetre or two of all their
+    centres. They are two faces when two planes fit them as well as the fits' least
+    ``scale`` allows (every centre within :data:`INSIDE_SIGMAS` × ``scale`` of its plane),
+    each spanned by four or more centres, with summed squared residuals at most
+    1/:data:`FOLD_RATIO` of the one plane's, each within ``reach_deg`` of its touches' sensor
+    normals, and the fold convex: each face's centres inside the other's plane (a concave
+    fold, the inside of an L-block, is left to the split tolerance). ``pairs`` are the
+    two-plane partitions (:func:`_two_plane_starts`, each with where :func:`_kplanes` took
+    it)."""
+    f = fit(idx)
+    if scale <= 0 or len(idx) < 8 or f.max_res <= INSIDE_SIGMAS * scale:
+        return None
+    cos_reach = math.cos(math.radians(reach_deg))
+    best: tuple[float, NDArray[np.bool_]] | None = None
+    for _, mask in pairs:
+        if mask.sum() < 4 or (~mask).sum() < 4:
+            continue
+        least = _least_sse(centres[idx[mask]]) + _least_sse(centres[idx[~mask]])
+        if least * FOLD_RATIO > _sse(f):
+            continue  # no fit of the two parts explains the centres well enough (below)
+        parts = (fit(idx[mask]), fit(idx[~mask]))
+        if not all(p.refined and p.max_res <= INSIDE_SIGMAS * scale for p in parts):
+            continue
+        if any(
+            float((normals[idx[m]] @ p.normal).min()) < cos_reach
+            for p, m in zip(parts, (mask, ~mask), strict=True)
+        ):
+            continue
+        # a convex fold: each face's centres lie inside the other's plane (two parallel lines of
+        # touches lie in one plane whatever faces they are on; a wrong pairing of them crosses)
+        a_in_b = centres[idx[mask]] @ parts[1].normal - parts[1].centre_offset
+        b_in_a = centres[idx[~mask]] @ parts[0].normal - parts[0].centre_offset
+        if max(float(a_in_b.max()), float(b_in_a.max())) > INSIDE_SIGMAS * scale:
+            continue
+        score = _sse(parts[0]) + _sse(parts[1])
+        if score * FOLD_RATIO <= _sse(f) and (best is None or score < best[0]):
+            best = (score, mask)
+    return None if best is None else best[1]
+
+
+_STRAY = 2
+"""At most this many touches off a line make a face of a line of touches and those (their
+plane is unchecked: :func:`_stray_touches`)."""
+
+
+def _stray_touches(
+    idx: NDArray[np.intp], centres: FloatArray, span_min: float, f: _Fit
+) -> NDArray[np.bool_] | None:
+    """The touches of ``idx`` that alone lift a line of touches into a plane, as a mask, or
+    None.
+
+    A face touched along one line (one contour pass) and, well off that line, at one or two
+    more points (``f`` refined only thanks to them) has a plane that nothing checks: two
+    points and a line fit a plane exactly, at whatever tilt their noise gives, and a touch
+    of the next face that the two-plane split left here tilts it by degrees. Those
+    :data:`_STRAY` or fewer touches are handed back as a group of their own: the line keeps
+    its sensors' normal, and each joins the face whose plane it lies on
+    (:func:`_merge_coplanar`), the same face again when that is the one."""
+    m = len(idx)
+    if not f.refined or m < _STRAY + 3:
+        return None
+    c = centres[idx]
+    stray = np.zeros(m, dtype=bool)
+    for _ in range(_STRAY):
+        rest = c[~stray]
+        mean = rest.mean(axis=0)
+        _, s, vt = np.linalg.svd(rest - mean, full_matrices=False)
+        if s[1] / math.sqrt(len(rest)) < span_min:
+            break
+        off = c - mean
+        across = np.linalg.norm(off - np.outer(off @ vt[0], vt[0]), axis=1)
+        across[stray] = -1.0
+        stray[int(np.argmax(across))] = True
+    else:
+        rest = c[~stray]
+        mean = rest.mean(axis=0)
+        _, s, vt = np.linalg.svd(rest - mean, full_matrices=False)
+        if s[1] / math.sqrt(len(rest)) >= span_min:
+            return None
+    if not stray.any():
+        return None
+    return stray
+
+
+EDGE_SPOTS = 3
+"""An edge beside a face is met in passing, at a contour layer's corner or by a short slide:
+its touches lie at no more than this many distinct places (:func:`_edge_line`); a line of
+more is a face of its own (a low-poly cylinder's next facet)."""
+
+
+def _spots(c: FloatArray, radius: float) -> int:
+    """How many places the points ``c`` lie at: each point further than ``radius`` from
+    every earlier place starts a new one."""
+    places: list[FloatArray] = []
+    for p in c:
+        if all(float(np.linalg.norm(p - q)) > radius for q in places):
+            places.append(p)
+    return len(places)
+
+
+_CUT_DIRECTIONS = 8
+"""In-plane directions along which :func:`_two_plane_starts` cuts a group's centres."""
+
+
+def _two_plane_starts(
+    idx: NDArray[np.intp], centres: FloatArray, normals: FloatArray, normal: FloatArray
+) -> list[NDArray[np.bool_]]:
+    """Partitions of the centres ``idx`` to start two-plane k-means from.
+
+    The widest gap along the fitted ``normal`` and along the sensors' mean normal (two
+    parallel faces at different offsets); and, for each of :data:`_CUT_DIRECTIONS`
+    directions in the fitted plane, the straight cut across it that leaves the two sides
+    with the least summed squared residuals about their own least-squares planes (two faces
+    meeting at a fold: their centres lie on either side of the fold line, and a plane
+    through both misses them by a V-shaped residual that no gap shows)."""
+    c = centres[idx]
+    m = len(c)
+    sensor_mean = normals[idx].mean(axis=0)
+    starts: list[NDArray[np.bool_]] = []
+    for axis in (normal, sensor_mean / np.linalg.norm(sensor_mean)):
+        h = c @ axis
+        order = np.argsort(h)
+        cut = int(np.argmax(np.diff(h[order])))
+        mask = np.zeros(m, dtype=bool)
+        mask[order[cut + 1 :]] = True
+        starts.append(mask)
+    if m < 6:
+        return starts
+    u = np.cross(normal, np.eye(3)[int(np.argmin(np.abs(normal)))])
+    u /= np.linalg.norm(u)
+    v = np.cross(normal, u)
+    x = c - c.mean(axis=0)
+    sizes = np.arange(1, m + 1, dtype=float)
+    for k in range(_CUT_DIRECTIONS):
+        a = math.pi * k / _CUT_DIRECTIONS
+        order = np.argsort(x @ (math.cos(a) * u + math.sin(a) * v), kind="stable")
+        s = x[order]
+        s1 = np.cumsum(s, axis=0)
+        s2 = np.cumsum(s[:, :, None] * s[:, None, :], axis=0)
+        # the first j + 1 centres against the other m - j - 1, each side at least three
+        j = np.arange(2, m - 3)
+        na, nb = sizes[j], m - sizes[j]
+        sa, sb = s1[j], s1[-1] - s1[j]
+        cov_a = s2[j] - sa[:, :, None] * sa[:, None, :] / na[:, None, None]
+        cov_b = (s2[-1] - s2[j]) - sb[:, :, None] * sb[:, None, :] / nb[:, None, None]
+        sse = np.linalg.eigvalsh(cov_a)[:, 0] + np.linalg.eigvalsh(cov_b)[:, 0]
+        best = int(j[int(np.argmin(sse))])
+        mask = np.zeros(m, dtype=bool)
+        mask[order[: best + 1]] = True
+        starts.append(mask)
+    unique: dict[bytes, NDArray[np.bool_]] = {}
+    for mask in starts:
+        unique.setdefault((mask if mask[0] else ~mask).tobytes(), mask)
+    return list(unique.values())
 
 
 def _kplanes(
@@ -605,11 +893,18 @@ def _faces_from_contacts(
         return []
     # the least scale of the robust face fits: the declared noise, or a flat face's detail
     scale = max(noise, current().geometry.robust_rho * rho)
-    fit = _fitter(centres, normals, span_min, scale)
+    fit = _exact_fitter(
+        _fitter(centres, normals, span_min, scale),
+        _fitter(centres, normals, min(span_min, NARROW_SPAN_SCALES * scale), scale),
+        scale,
+    )
+    # a sensor fires for a surface within about one sensor spacing (twice the worst
+    # quantisation) of its direction
+    reach = 2.0 * merge_cone if merge_cone > 0 else current().geometry.max_refine_deg
     labels = _normal_clusters(normals[keep], cut)
     groups: list[NDArray[np.intp]] = []
     for lab in np.unique(labels):
-        groups += _split(keep[labels == lab], centres, normals, span_min, tol, fit)
+        groups += _split(keep[labels == lab], centres, normals, span_min, tol, fit, 0, scale, reach)
     groups = _merge_coplanar(groups, fit, tol, merge_deg, merge_cone, centres, scale)
     groups.sort(key=lambda g: int(g.min()))
     index = (
@@ -652,6 +947,44 @@ def _faces_from_contacts(
             )
         )
     return out
+
+
+NARROW_SPAN_SCALES = 10.0
+"""Centres that lie on a plane within :data:`NARROW_SCALES` × the fits' least scale (no
+noise, no surface detail) span it when their spread across their line is this many least
+scales, below the ``span`` setting (:func:`_exact_fitter`)."""
+
+NARROW_SCALES = 2.0
+"""See :data:`NARROW_SPAN_SCALES`."""
+
+NARROW_MIN = 6
+"""Least number of centres a narrow span is trusted with (:func:`_exact_fitter`)."""
+
+
+def _exact_fitter(fit: FitFn, narrow: FitFn, scale: float) -> FitFn:
+    """``fit``, or where it does not refine a group, ``narrow`` (the same fit with a smaller
+    least span) when that refines it and the centres lie on their plane within
+    :data:`NARROW_SCALES` × ``scale`` (their scatter about it, with three degrees of freedom
+    taken by the plane), and there are at least :data:`NARROW_MIN` of them.
+
+    A face met by two passes a few millimetres apart (an undercut touched with the head
+    indexed, a small face near an apex) spans a plane of its own: exact touches fix its
+    normal to a fraction of a degree over a millimetre or two, where the sensors leave it
+    to half a sensor spacing. The ``span`` setting guards against noise and surface detail;
+    where the centres show neither, it need not."""
+
+    def best(idx: NDArray[np.intp]) -> _Fit:
+        f = fit(idx)
+        if f.refined:
+            return f
+        if len(idx) < NARROW_MIN:
+            return f  # three to five centres fit a plane whatever surface they lie on
+        g = narrow(idx)
+        if g.refined and math.sqrt(_sse(g) / (len(idx) - 3)) <= NARROW_SCALES * scale:
+            return g
+        return f
+
+    return best
 
 
 @functools.lru_cache(maxsize=8)
@@ -702,7 +1035,10 @@ def _merge_coplanar(
         # candidate pairs (i < j, row by row) from one matrix product, each confirmed below
         unspanned = ~(refined[:, None] & refined[None, :])
         near = np.triu((cos >= cos_min - 1e-9) | (unspanned & (cos >= cos_loose - 1e-9)), 1)
-        for i, j in zip(*np.nonzero(near), strict=True):
+        pairs = list(zip(*np.nonzero(near), strict=True))
+        # a line joins a face that spans a plane before two lines join each other
+        pairs.sort(key=lambda ij: 2 - int(refined[ij[0]]) - int(refined[ij[1]]))
+        for i, j in pairs:
             both = np.concatenate([groups[i], groups[j]])
             joint = fit(both)
             if joint.max_res > tol:
