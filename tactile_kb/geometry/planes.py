@@ -464,7 +464,9 @@ def _edge_line(
         if edge.all() or not edge.any() or (~edge).sum() < 3 or edge.tobytes() in seen:
             continue
         seen.add(edge.tobytes())
-        if _spots(centres[idx[edge]], 10.0 * scale) > EDGE_SPOTS:
+        if best is not None and int(edge.sum()) >= best[0]:
+            continue  # cannot beat the fewer touches already set apart (below)
+        if _spots(centres[idx[edge]], 10.0 * scale, EDGE_SPOTS) > EDGE_SPOTS:
             continue  # a line of many touches is a face explored, not an edge met in passing
         if fit(idx[edge]).refined:
             continue
@@ -592,14 +594,23 @@ its touches lie at no more than this many distinct places (:func:`_edge_line`); 
 more is a face of its own (a low-poly cylinder's next facet)."""
 
 
-def _spots(c: FloatArray, radius: float) -> int:
+def _spots(c: FloatArray, radius: float, limit: int | None = None) -> int:
     """How many places the points ``c`` lie at: each point further than ``radius`` from
-    every earlier place starts a new one."""
-    places: list[FloatArray] = []
-    for p in c:
-        if all(float(np.linalg.norm(p - q)) > radius for q in places):
-            places.append(p)
-    return len(places)
+    every earlier place starts a new one. With ``limit``, counting stops at ``limit + 1``
+    (enough to tell that there are more than ``limit``)."""
+    if len(c) == 0:
+        return 0
+    far = np.ones(len(c), dtype=bool)  # further than ``radius`` from every place so far
+    count, i = 0, 0
+    while True:
+        count += 1  # the point i starts a place
+        if limit is not None and count > limit:
+            return count
+        far[i + 1 :] &= np.sqrt(((c[i + 1 :] - c[i]) ** 2).sum(axis=1)) > radius
+        later = np.flatnonzero(far[i + 1 :])
+        if len(later) == 0:
+            return count
+        i += 1 + int(later[0])
 
 
 _CUT_DIRECTIONS = 8
