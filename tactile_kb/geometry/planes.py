@@ -458,14 +458,17 @@ def _edge_line(
     masks = [which == k for k in range(int(which.max()) + 1)] if which.max() < 4 else []
     for start, mask in pairs:
         masks += [mask, ~mask, start, ~start]
-    best: tuple[int, NDArray[np.bool_]] | None = None
+    # the fewest touches win, the first such mask on a tie: trying the masks in that order
+    # (a stable sort by size), the first that passes is the one
     seen: set[bytes] = set()
+    candidates: list[NDArray[np.bool_]] = []
     for edge in masks:
         if edge.all() or not edge.any() or (~edge).sum() < 3 or edge.tobytes() in seen:
             continue
         seen.add(edge.tobytes())
-        if best is not None and int(edge.sum()) >= best[0]:
-            continue  # cannot beat the fewer touches already set apart (below)
+        candidates.append(edge)
+    candidates.sort(key=lambda e: int(e.sum()))
+    for edge in candidates:
         if _spots(centres[idx[edge]], 10.0 * scale, EDGE_SPOTS) > EDGE_SPOTS:
             continue  # a line of many touches is a face explored, not an edge met in passing
         if fit(idx[edge]).refined:
@@ -479,9 +482,8 @@ def _edge_line(
         depth = centres[idx[edge]] @ face.normal - face.centre_offset
         if float(depth.max()) >= -INSIDE_SIGMAS * sigma:
             continue
-        if best is None or int(edge.sum()) < best[0]:
-            best = (int(edge.sum()), edge)
-    return None if best is None else best[1]
+        return edge
+    return None
 
 
 FOLD_RATIO = 25.0
