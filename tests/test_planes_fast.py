@@ -38,3 +38,15 @@ def test_spots_on_constructed_places() -> None:
     assert _spots(c, 0.005, 2) == 3  # stops at limit + 1
     assert _spots(c, 0.0001) == 12
     assert _spots(c[:0], 0.005) == 0
+
+
+def test_median_is_numpys_median() -> None:
+    """The partition median of the robust fits equals np.median, bit for bit, odd and even."""
+    from tactile_kb.geometry.planes import _median
+
+    rng = np.random.default_rng(7)
+    for n in (1, 2, 3, 4, 5, 10, 11, 100, 101):
+        for _ in range(20):
+            a = rng.normal(size=n) * rng.uniform(1e-6, 10.0)
+            assert _median(a) == float(np.median(a))
+    assert _median(np.array([3.0, 1.0, 2.0, 2.0])) == 2.0
