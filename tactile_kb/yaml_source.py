@@ -244,6 +244,13 @@ def _check_events(text: str, name: str) -> Problem | None:
         what = f"U+{exc.character:04X}" if isinstance(exc.character, int) else repr(exc.character)
         return Problem(name, line, col, "", f"control character {what} is not allowed in YAML")
     except yaml.MarkedYAMLError as exc:
+        mark = exc.problem_mark
+        if "nesting depth" in str(exc.problem) and mark is not None and 0 < mark.index < len(text):
+            # PyYAML ≥ 6.0.4 refuses nesting over 1000 while it scans ahead, before the events
+            # reach MAX_DEPTH: the text up to that point holds the first level too deep
+            found = _check_events(text[: mark.index], name)
+            if found is not None and found.message.startswith("nested more than"):
+                return found
         return _syntax_problem(text, name, exc)
     return None
 
