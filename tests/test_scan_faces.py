@@ -8,6 +8,7 @@ touching a rounded edge, a bump or a hollow puts them, and leave-one-out fits en
 
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import numpy as np
@@ -187,15 +188,7 @@ def test_a_face_touched_a_few_times_is_no_more_certain_than_the_surface() -> Non
                 f.normal, f.offset, f.n_contacts, 0.0005, 1.0, f.contacts, True, f.source, 0.0
             )
             rough.append(k)
-    scanned = type(model)(
-        record=model.record,
-        faces=tuple(faces),
-        polyhedron=model.polyhedron,
-        supporting=model.supporting,
-        layers=model.layers,
-        options=model.options,
-        face_of=model.face_of,
-    )
+    scanned = dataclasses.replace(model, faces=tuple(faces))
     unc = dict(zip(scanned.face_of, _uncertainty(scanned), strict=True))
     own = math.radians(0.1)
     # pooled: ((2 · 0.05² · 5/2) + 4 · 0.5²) / 6 mm², against the fit's 0.05² · 5/2
