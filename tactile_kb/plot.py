@@ -115,13 +115,60 @@ def save_figure(fig: Figure, path: str | Path, *, dpi: float | None = None) -> P
 # ---------------------------------------------------------------------------------------------
 
 
-def _set_equal(ax: Any, points: np.ndarray[Any, np.dtype[np.float64]]) -> None:
+VIEW_MARGIN = 0.35
+"""The 3-D view frames the object (its mesh, else its contacts and model) and this share of its
+size around it; the finger's path is clipped there, so a long approach from the workspace's
+edge does not shrink the object to a speck."""
+
+
+def _view_box(
+    points: np.ndarray[Any, np.dtype[np.float64]],
+) -> tuple[np.ndarray[Any, np.dtype[np.float64]], np.ndarray[Any, np.dtype[np.float64]]]:
+    """A cube (lower and upper corners) around ``points`` with :data:`VIEW_MARGIN` of its size
+    to spare, its floor at most 2 mm below the lowest point (the table). A cube keeps the three
+    axes at equal scales and their labels where matplotlib places them well."""
     lo, hi = points.min(axis=0), points.max(axis=0)
-    centre, half = (lo + hi) / 2.0, max(float((hi - lo).max()) / 2.0, 1e-3) * 1.05
-    ax.set_xlim(centre[0] - half, centre[0] + half)
-    ax.set_ylim(centre[1] - half, centre[1] + half)
-    ax.set_zlim(max(centre[2] - half, lo[2] - 0.002), centre[2] + half)
+    centre = (lo + hi) / 2.0
+    half = max(float((hi - lo).max()) / 2.0, 1e-3) * (1.0 + VIEW_MARGIN)
+    low = centre - half
+    low[2] = max(low[2], float(lo[2]) - 0.002)
+    return low, low + 2.0 * half
+
+
+def _set_view(
+    ax: Any,
+    box: tuple[np.ndarray[Any, np.dtype[np.float64]], np.ndarray[Any, np.dtype[np.float64]]],
+) -> None:
+    low, high = box
+    ax.set_xlim(low[0], high[0])
+    ax.set_ylim(low[1], high[1])
+    ax.set_zlim(low[2], high[2])
     ax.set_box_aspect((1.0, 1.0, 1.0), zoom=0.95)
+
+
+def _clip_polyline(
+    path: np.ndarray[Any, np.dtype[np.float64]],
+    box: tuple[np.ndarray[Any, np.dtype[np.float64]], np.ndarray[Any, np.dtype[np.float64]]],
+) -> list[np.ndarray[Any, np.dtype[np.float64]]]:
+    """The parts of the polyline ``path`` (N, 3) inside the axis-aligned ``box``, as (2, 3)
+    segments (Liang-Barsky clipping of every step)."""
+    if len(path) < 2:
+        return []
+    low, high = box
+    a, d = path[:-1], np.diff(path, axis=0)
+    t0, t1 = np.zeros(len(d)), np.ones(len(d))
+    with np.errstate(divide="ignore", invalid="ignore"):
+        for k in range(3):
+            still = np.abs(d[:, k]) < 1e-15
+            outside = still & ((a[:, k] < low[k]) | (a[:, k] > high[k]))
+            t1[outside] = -1.0
+            ta, tb = (low[k] - a[:, k]) / d[:, k], (high[k] - a[:, k]) / d[:, k]
+            enter, leave = np.minimum(ta, tb), np.maximum(ta, tb)
+            t0 = np.where(still, t0, np.maximum(t0, enter))
+            t1 = np.where(still, t1, np.minimum(t1, leave))
+    keep = t1 > t0
+    a, d, t0, t1 = a[keep], d[keep], t0[keep], t1[keep]
+    return list(np.stack([a + t0[:, None] * d, a + t1[:, None] * d], axis=1))
 
 
 def _draw_3d(
@@ -143,9 +190,7 @@ def _draw_3d(
         )
         extent.append(np.asarray(mesh.vertices, dtype=float))
     if record.path:
-        path = np.asarray(record.path, dtype=float)
-        ax.plot(path[:, 0], path[:, 1], path[:, 2], color="0.45", lw=0.6, label="finger path")
-        extent.append(path)
+        ax.plot([], [], [], color="0.45", lw=0.6, label="finger path (tip centre)")
     if record.contacts:
         pts = np.asarray([c.point for c in record.contacts], dtype=float)
         _draw_contacts(ax, pts, model)
@@ -205,8 +250,13 @@ def _draw_3d(
                 depthshade=False,
                 label="centre of mass",
             )
-    if extent:
-        _set_equal(ax, np.vstack(extent))
+    path = np.asarray(record.path, dtype=float).reshape(-1, 3)
+    if extent or len(path):
+        box = _view_box(np.vstack(extent) if extent else path)
+        steps = _clip_polyline(path, box)
+        if steps:
+            ax.add_collection3d(Line3DCollection(steps, colors="0.45", linewidths=0.6))
+        _set_view(ax, box)
     for axis in "xyz":
         getattr(ax, f"set_{axis}label")(f"{axis} (mm)", fontsize=_FONT, labelpad=6)
     _millimetres(ax)

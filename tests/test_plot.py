@@ -296,3 +296,48 @@ def test_the_shaft_at_each_touch_shows_the_heads_pose(box_record: ExplorationRec
     d /= np.linalg.norm(d, axis=1)[:, None]
     assert len(segs) == len(tilted)
     np.testing.assert_allclose(d, np.tile([0.5**0.5, 0.5**0.5, 0.0], (len(tilted), 1)), atol=1e-9)
+
+
+def test_clip_polyline_keeps_what_lies_inside_the_box() -> None:
+    from tactile_kb.plot import _clip_polyline
+
+    box = (np.zeros(3), np.ones(3))
+    path = np.array(
+        [
+            [-1.0, 0.5, 0.5],  # enters through x = 0 ...
+            [0.5, 0.5, 0.5],  # ... inside ...
+            [0.5, 0.5, 3.0],  # ... leaves through z = 1
+            [2.0, 2.0, 2.0],  # wholly outside
+            [2.0, 0.5, 0.5],  # outside, still outside
+            [-2.0, 0.5, 0.5],  # crosses the whole box along x
+        ]
+    )
+    segs = _clip_polyline(path, box)
+    want = [
+        [[0.0, 0.5, 0.5], [0.5, 0.5, 0.5]],
+        [[0.5, 0.5, 0.5], [0.5, 0.5, 1.0]],
+        [[1.0, 0.5, 0.5], [0.0, 0.5, 0.5]],
+    ]
+    np.testing.assert_allclose(np.array(segs), np.array(want), atol=1e-12)
+    assert _clip_polyline(path[:1], box) == []
+    # a step along the box's face (d = 0 in two coordinates) stays when on it, goes when beside
+    edge = np.array([[0.0, 0.0, -1.0], [0.0, 0.0, 2.0]])
+    np.testing.assert_allclose(_clip_polyline(edge, box)[0], [[0, 0, 0], [0, 0, 1]])
+    assert _clip_polyline(edge + np.array([0.0, -0.1, 0.0]), box) == []
+
+
+def test_the_view_frames_the_object_not_the_long_approach(box_record: ExplorationRecord) -> None:
+    from tactile_kb.plot import VIEW_MARGIN
+
+    far = [(-0.45, 0.4, 0.3), *box_record.path]  # an approach from the workspace's corner
+    record = box_record.model_copy(update={"path": far})
+    mesh = box(0.1, 0.1, 0.1)
+    fig = plot_exploration(record, mesh=mesh)
+    ax = next(ax for ax in fig.axes if ax.name == "3d")
+    size = float(np.ptp(np.asarray(mesh.vertices), axis=0).max())
+    spans = [hi - lo for lo, hi in (ax.get_xlim(), ax.get_ylim(), ax.get_zlim())]
+    for span in spans:
+        assert span <= size * (1.0 + VIEW_MARGIN) * 1.05  # matplotlib pads 3-D limits a little
+    xlo, xhi = ax.get_xlim()
+    assert xlo > -0.2  # the corner at x = -0.45 is outside the view
+    assert xhi < 0.2
