@@ -412,11 +412,14 @@ def _draw_layers(ax: Any, model: ObjectModel, grasp: GraspPlan | None = None) ->
     _millimetres(ax)
     ax.tick_params(labelsize=_TICK_FONT)
     if layers:  # below the panel, never over the contours
+        box = ax.get_position()  # below the x axis's ticks and label, whatever the axes' height
+        below = 3.2 * _FONT / (72.0 * float(ax.figure.get_size_inches()[1]))
         ax.legend(
             fontsize=_FONT - 1,
             frameon=False,
             loc="upper center",
-            bbox_to_anchor=(0.5, -0.16),
+            bbox_to_anchor=(box.x0 + box.width / 2.0, box.y0 - below),
+            bbox_transform=ax.figure.transFigure,
             ncol=1,
         )
 
@@ -467,15 +470,25 @@ def plot_exploration(
     else:
         plan = None
     fig = _figure(size, dpi)
+    if title is None:
+        title = f"{record.object or 'object'}\n{_counts(model)}"
+        if plan is not None:
+            title += "\n" + _grasp_line(plan)
+    title = _wrap(title, size[0])
+    # the panels start below the title's lines (and the layer panel's own title line)
+    line = 1.35 * _TITLE_FONT / (72.0 * size[1])  # one title line, a share of the height
+    below = 0.985 - (title.count("\n") + 1) * line
     layered = any(len(lay.contour) >= 3 for lay in model.layers) and (
         model.polyhedron is None or not model.convex
     )
     if layered:  # the 3-D view and the layer contours side by side, each legend below its view
-        ax3 = fig.add_axes((0.0, 0.30, 0.52, 0.56), projection="3d")
-        ax2 = fig.add_axes((0.62, 0.40, 0.35, 0.44))
+        top = min(0.86, below)
+        ax3 = fig.add_axes((0.0, 0.30, 0.52, top - 0.30), projection="3d")
+        top = min(0.84, below - 1.6 * _FONT / (72.0 * size[1]))
+        ax2 = fig.add_axes((0.62, 0.40, 0.35, top - 0.40))
         _draw_layers(ax2, model, plan)
     else:  # the 3-D view, its legend on the right
-        ax3 = fig.add_axes((0.0, 0.02, 0.56, 0.82), projection="3d")
+        ax3 = fig.add_axes((0.0, 0.02, 0.56, min(0.84, below) - 0.02), projection="3d")
     _draw_3d(ax3, record, model, mesh, plan, fig, layered)
     handles, labels = ax3.get_legend_handles_labels()
     if handles:  # an empty record draws nothing to name
@@ -484,24 +497,51 @@ def plot_exploration(
             if layered
             else {"loc": "center left", "ncol": 1, "bbox_to_anchor": (0.58, 0.45)}
         )
-        fig.legend(
+        _fitting_legend(
+            fig,
             handles,
             labels,
-            fontsize=_FONT - 1,
-            frameon=False,
             title="(n): contacts on the face" if any(": " in x for x in labels) else None,
-            title_fontsize=_FONT - 1,
-            columnspacing=1.0,
+            right=0.6 if layered else 1.0,
             **where,
         )
-    if title is None:
-        title = f"{record.object or 'object'}\n{_counts(model)}"
-        if plan is not None:
-            title += "\n" + _grasp_line(plan)
-    fig.suptitle(_wrap(title, size[0]), fontsize=_TITLE_FONT)
+    fig.suptitle(title, fontsize=_TITLE_FONT)
     if path is not None:
         save_figure(fig, path)
     return fig
+
+
+def _fitting_legend(
+    fig: Figure,
+    handles: Sequence[Any],
+    labels: Sequence[str],
+    *,
+    title: str | None,
+    right: float,
+    **where: Any,
+) -> None:
+    """The figure's legend at ``where``, its font made smaller (down to 5 points) until it lies
+    inside the figure, left of ``right`` (a share of the width: the layer panel's legend is
+    on the right). A long legend of a small figure would otherwise be cut off."""
+    width, height = fig.bbox.width, fig.bbox.height
+    size = float(_FONT - 1)
+    while True:
+        legend = fig.legend(
+            handles,
+            labels,
+            fontsize=size,
+            frameon=False,
+            title=title,
+            title_fontsize=size,
+            columnspacing=1.0,
+            **where,
+        )
+        box = legend.get_window_extent()  # laid out by the figure's own renderer
+        inside = box.x0 >= 0 and box.y0 >= 0 and box.x1 <= right * width and box.y1 <= height
+        if inside or size <= 5.0:
+            return
+        legend.remove()
+        size -= 0.5
 
 
 def _counts(model: ObjectModel) -> str:

@@ -12,6 +12,7 @@ from tactile_kb import solids
 from tactile_kb.errors import UsageError
 from tactile_kb.geometry.polyhedron import polyhedron_from_planes
 from tactile_kb.geometry.sections import (
+    FAR_CORNER,
     contour_from_contacts,
     cross_section,
     distinct_planes,
@@ -98,3 +99,68 @@ def test_contour_from_contacts_of_a_square_and_too_few_sides() -> None:
     ]
     with pytest.raises(UsageError, match="at least three"):
         contour_from_contacts(contacts[:4], rho)
+
+
+def _side_contacts(
+    sides: list[tuple[tuple[float, float], tuple[float, float]]], rho: float, spread: float
+) -> list[Contact]:
+    """Two contacts on each side (unit outward normal, a point of the side), in order."""
+    out = []
+    for k, (n, p) in enumerate(sides):
+        nn = np.asarray(n, dtype=float) / np.linalg.norm(n)
+        for t in (-spread, spread):
+            point = np.asarray(p) + np.array([-nn[1], nn[0]]) * t
+            centre = point + rho * nn
+            out.append(
+                Contact(
+                    step=len(out),
+                    centre=(*centre, 0.01),
+                    sensors=(k,),
+                    direction=(-nn[0], -nn[1], 0.0),
+                    point=(*point, 0.01),
+                )
+            )
+    return out
+
+
+def test_nearly_parallel_neighbours_do_not_meet_far_away() -> None:
+    """A layer whose +y side was met at two spots: the right part at y = 50 mm, the left part
+    a step out and turned 8°, with the part between unexplored. Their lines meet 150 mm to
+    the left, far outside the touched region; the contour keeps to that region, running
+    across from the one line's last contact to the other's first."""
+    rho, tilt = 0.005, math.radians(8.0)
+    sides = [
+        ((1.0, 0.0), (0.05, 0.0)),
+        ((0.0, 1.0), (0.03, 0.05)),  # +y, right part
+        ((-math.sin(tilt), math.cos(tilt)), (-0.03, 0.05 + 0.12 * math.tan(tilt))),  # left part
+        ((-1.0, 0.0), (-0.05, 0.0)),
+        ((0.0, -1.0), (0.0, -0.05)),
+    ]
+    contacts = _side_contacts(sides, rho, 0.01)
+    poly = np.asarray(contour_from_contacts(contacts, rho))
+    points = np.asarray([c.point[:2] for c in contacts])
+    lo, hi = points.min(axis=0), points.max(axis=0)
+    slack = FAR_CORNER * float(np.linalg.norm(hi - lo))
+    assert np.all(poly >= lo - slack - 1e-12)
+    assert np.all(poly <= hi + slack + 1e-12)
+    assert len(poly) == 6  # the far corner is two: the chord's ends
+    # the chord's ends are the last contact on the right part and the first on the left one
+    for end in (contacts[3].point[:2], contacts[4].point[:2]):
+        assert np.min(np.linalg.norm(poly - np.asarray(end), axis=1)) < 1e-9
+
+
+def test_a_shallow_roof_keeps_its_corner() -> None:
+    """Two parts of the +y side turned ±4°, meeting above the middle: a corner near the
+    touched region, kept."""
+    rho, tilt = 0.005, math.radians(4.0)
+    sides = [
+        ((1.0, 0.0), (0.05, 0.0)),
+        ((math.sin(tilt), math.cos(tilt)), (0.03, 0.05)),
+        ((-math.sin(tilt), math.cos(tilt)), (-0.03, 0.05)),
+        ((-1.0, 0.0), (-0.05, 0.0)),
+        ((0.0, -1.0), (0.0, -0.05)),
+    ]
+    poly = np.asarray(contour_from_contacts(_side_contacts(sides, rho, 0.01), rho))
+    assert len(poly) == 5
+    apex = poly[np.argmax(poly[:, 1])]
+    np.testing.assert_allclose(apex, [0.0, 0.05 + 0.03 * math.tan(tilt)], atol=1e-9)

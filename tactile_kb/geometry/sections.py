@@ -21,7 +21,7 @@ from __future__ import annotations
 
 import itertools
 import math
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -35,6 +35,7 @@ from tactile_kb.settings import DEFAULTS, current
 from tactile_kb.types import FloatArray
 
 __all__ = [
+    "FAR_CORNER",
     "LayerSection",
     "TouchedLine",
     "contour_from_contacts",
@@ -186,21 +187,46 @@ def contour_from_contacts(
         Fewer than three distinct sides were touched.
     """
     lines = touched_lines(contacts, tip_radius)
-    return [(float(x), float(y)) for x, y in _polygon(lines, closed)]
+    points = {i: np.asarray(c.point[:2], dtype=float) for i, c in enumerate(contacts)}
+    return [(float(x), float(y)) for x, y in _polygon(lines, closed, points)]
 
 
-def _polygon(lines: Sequence[TouchedLine], closed: bool) -> FloatArray:
+FAR_CORNER = 0.25
+"""A contour corner (two touched lines meeting) further outside the box of its layer's contact
+points than this share of the box's diagonal is not a corner: the two lines are nearly
+parallel, with an unexplored side between them. The contour runs from the last contact on the
+one line to the first on the other instead."""
+
+
+def _project(line: TouchedLine, point: FloatArray) -> FloatArray:
+    n = np.asarray(line.normal, dtype=float)
+    return np.asarray(point - (float(n @ point) - line.offset) * n, dtype=float)
+
+
+def _polygon(
+    lines: Sequence[TouchedLine], closed: bool, points: Mapping[int, FloatArray]
+) -> FloatArray:
+    """The contour through consecutive ``lines``' corners; ``points`` are the layer's contact
+    points (x, y) by the indices the lines hold."""
     if len(lines) < 3:
         raise UsageError(f"a contour needs at least three touched sides, got {len(lines)}")
     pairs = list(itertools.pairwise(lines))
     if closed:
         pairs.append((lines[-1], lines[0]))
+    touched = np.asarray(list(points.values()), dtype=float).reshape(-1, 2)
+    lo, hi = touched.min(axis=0), touched.max(axis=0)
+    slack = FAR_CORNER * float(np.linalg.norm(hi - lo))
     pts = []
     for a, b in pairs:
         m = np.array([a.normal, b.normal])
         if abs(np.linalg.det(m)) < 1e-6:
             continue  # parallel neighbours (an unexplored side in between)
-        pts.append(np.linalg.solve(m, [a.offset, b.offset]))
+        corner = np.linalg.solve(m, [a.offset, b.offset])
+        if bool(np.all(corner >= lo - slack) & np.all(corner <= hi + slack)):
+            pts.append(corner)
+        else:  # nearly parallel: the chord across the unexplored side between them
+            pts.append(_project(a, points[a.contacts[-1]]))
+            pts.append(_project(b, points[b.contacts[0]]))
     poly = np.asarray(pts, dtype=float).reshape(-1, 2)
     if polygon_area(poly) < 0:
         poly = poly[::-1]
@@ -220,8 +246,9 @@ def layer_sections(record: ExplorationRecord) -> tuple[LayerSection, ...]:
         lines = tuple(touched_lines(cs, record.tip_radius, indices=idx))
         z = float(np.median([c.point[2] for c in cs]))
         closed = any(lay.index == layer and lay.closed for lay in record.layers) or len(lines) >= 3
+        points = {i: np.asarray(record.contacts[i].point[:2], dtype=float) for i in idx}
         try:
-            contour = _polygon(lines, closed)
+            contour = _polygon(lines, closed, points)
         except UsageError:
             contour = np.zeros((0, 2))
         out.append(LayerSection(layer, z, lines, contour, closed))

@@ -72,7 +72,7 @@ from tactile_kb.touch.watch import current_watcher
 from tactile_kb.touch.world import Motion, OrientableWorld, Vec3, World
 from tactile_kb.types import FloatArray
 
-__all__ = ["Completer", "Controller", "Ending", "Mark", "Probe", "ServoParams"]
+__all__ = ["RETRACE_POINTS", "Completer", "Controller", "Ending", "Mark", "Probe", "ServoParams"]
 
 Mark = Literal["contact", "layer", "complete"]
 """What :meth:`Controller.run` yields: the first touch, a finished layer, the end."""
@@ -101,6 +101,11 @@ it (the 33-sensor finger's neighbours lie 30° apart) when within this angle."""
 PERSIST_TRIES = DEFAULTS.servo.persist_tries
 """How often a blocked slide's re-acquisition (:meth:`Controller._persist`) backs off and steps
 on, each time twice as far (0.8, 1.6, 3.2 tip radii), before the contour ends."""
+
+
+RETRACE_POINTS = 64
+"""How many of the tip's last positions the way back from under an overhang may run through
+(see :meth:`Controller._retrace_up`)."""
 
 
 @dataclass(frozen=True)
@@ -349,6 +354,7 @@ class Controller:
         self._layer: int | None = None
         self._last_pos: Vec3 | None = None
         self._last_move: Motion | None = None
+        self._trail: list[Vec3] = []  # where the tip centre truly went (the robot's own way)
         self._surfaces: list[tuple[float, _Segment]] = []  # (layer z, surface slid along)
         self._heights: list[float] = []  # the z of every layer
 
@@ -367,6 +373,9 @@ class Controller:
         if self._last_pos is None or m.start != self._last_pos:
             self.path.append(m.start)
         self.path.append(m.measured)
+        for point in (m.start, m.end):
+            if not self._trail or point != self._trail[-1]:
+                self._trail.append(point)
         self._last_pos = m.end
         self._last_move = m
         watcher = current_watcher()
@@ -782,11 +791,63 @@ class Controller:
                 # under an overhang (a lying prism's lower side): out of the object's
                 # footprint horizontally, then up
                 m = self._out_and_up(here, safe)
+                if m.event not in ("none", "release"):
+                    m = self._retrace_up(safe) or m
                 here = np.asarray(m.end, dtype=float)
             if m.event not in ("none", "release"):
                 self._note(f"the way to a probe ({why}) is blocked at {_fmt(m.end)} ({m.event})")
                 return False
         return True
+
+    def _free(self, start: FloatArray, direction: FloatArray, length: float) -> bool:
+        """Whether the world lets the tip move ``length`` along ``direction`` from ``start``
+        without meeting anything (losses of contact aside). Asked, not moved: nothing is
+        recorded."""
+        done = 0.0
+        pos = start
+        while done < length - 1e-9:
+            m = self.world.move(_v3(pos), _v3(direction), length - done)
+            if m.event not in ("none", "release") or m.distance <= 0.0:
+                return m.event in ("none", "release") and done + m.distance >= length - 1e-9
+            done += m.distance
+            pos = np.asarray(m.end, dtype=float)
+        return True
+
+    def _retrace_up(self, safe: float) -> Motion | None:
+        """Back along the finger's own way until the way straight up to ``safe`` is free, then
+        up; the last motion, or None when no point of the last :data:`RETRACE_POINTS` on the way
+        back has a free way up (nothing is moved then). The way back runs straight between the
+        points of the way in where no sensor touched, each leg free.
+
+        Under an overhang that also closes the way out sideways (a wing of a compound object),
+        the way the finger came in is the one known way out: a robot can always run its own
+        motions backwards. The points are the true positions of the tip (the record's path
+        holds the measured ones)."""
+        trail = [np.asarray(p, dtype=float) for p in self._trail[-RETRACE_POINTS:]]
+        if len(trail) < 2:
+            return None
+        cur = trail[-1]
+        legs: list[tuple[FloatArray, FloatArray, float]] = []
+        for point in reversed(trail[:-1]):
+            d = point - cur
+            length = float(np.linalg.norm(d))
+            if length > 1e-9:
+                # a point where the tip touched is passed by: the way runs between free points
+                if self.world.sense(_v3(point)) or not self._free(cur, d / length, length):
+                    continue
+                legs.append((cur, d / length, length))
+                cur = point
+            rise = safe - float(cur[2])
+            if rise > 1e-9 and not self._free(cur, _Z, rise):
+                continue
+            for start, direction, length in legs:
+                m = self._move_on(start, direction, length)
+                if m.event not in ("none", "release"):
+                    return m
+            if rise <= 1e-9:
+                return self._last_move
+            return self._move_on(cur, _Z, rise)
+        return None
 
     def _out_and_up(self, here: FloatArray, safe: float) -> Motion:
         """Leave the hint box's footprint horizontally (away from its middle), then rise to
