@@ -66,6 +66,7 @@ __all__ = [
     "corner_juts",
     "corner_probes",
     "model_completer",
+    "second_spot_probes",
 ]
 
 _SIDES = 8  # horizontal directions checked for a side never touched (every 45°)
@@ -78,7 +79,8 @@ normal no better than its neighbours', and a touch off the line then fits nothin
 _PATH = "the path passes inside the model"
 _HINT = "the hint reaches beyond the model"
 _CORNER = "a corner juts out"
-_TESTS = (_PATH, _HINT, _CORNER)  # probes that test the model, never holding the completion open
+_SPOT = "a face touched at one spot"
+_TESTS = (_PATH, _HINT, _CORNER, _SPOT)  # tests of the model, never holding the completion open
 
 PATH_PROBES = 4
 """At most this many probes per exploration where a contour's path passed inside the model, or
@@ -256,11 +258,98 @@ def completion_probes(model: ObjectModel, *, height_gap: float | None = None) ->
     # a face left out as concave but touched at one height: its quantised normal may be what
     # made it look concave (an overhanging side read as vertical)
     probes += _one_height_probes(model, centres, rho, gap, concave=True)
+    probes += second_spot_probes(model)
     probes += _low_side_probes(model, centres, rho)
     probes += _beyond_model_probes(model, rho)
     probes += _free_path_probes(model, rho)
     probes += corner_probes(model)
     return probes
+
+
+def second_spot_probes(model: ObjectModel) -> list[Probe]:
+    """Probes of the faces the model knows from one spot only, each at a second spot as far
+    from the first as the face allows.
+
+    A probe's touch and its short slide leave a few tip centres a few millimetres apart: a
+    plane fitted through them (or the sensor's quantised normal, when they lie along one
+    line) tilts by degrees under noise, and a plane that is wrong there moves the model's
+    corners far from the object (an undercut face of a lying pyramid met once by an indexed
+    probe). A face counts as touched at one spot when all its tip centres lie within
+    ``explore.spot_rho`` × ρ of each other in its plane. The second probe is aimed at the
+    point of the face's polygon, pulled halfway to its middle, furthest from the first spot,
+    and approached along the face's normal (the head indexed when the face overhangs): its
+    touch confirms the plane, or, landing elsewhere, corrects it. Faces whose polygon has no
+    such point at least ``spot_rho`` × ρ from the first spot, the table and tops (touched
+    from above along lines: :func:`_top_probes`) get none. Like the corner checks, these
+    test the model and never hold the completion open; at most ``explore.spot_probes`` per
+    exploration (:class:`ModelCompleter`).
+    """
+    poly = model.polyhedron
+    record = model.record
+    if poly is None or not record.contacts:
+        return []
+    rho = record.tip_radius
+    spot = current().explore.spot_rho * rho
+    centres = np.asarray([c.centre for c in record.contacts], dtype=float).reshape(-1, 3)
+    top_nz = current().explore.top_nz
+    out = []
+    for k, verts in enumerate(poly.faces):
+        found = _modelled_face(model, k)
+        if found is None:
+            continue
+        face, n = found
+        if face.source != "contacts" or not face.contacts or n[2] >= top_nz:
+            continue
+        pts = centres[list(face.contacts)]
+        flat = pts - np.outer(pts @ n, n)  # the tip centres seen along the normal
+        if face.refined and (
+            float(np.linalg.norm(flat[:, None, :] - flat[None, :, :], axis=2).max()) >= spot
+        ):
+            continue  # touched at two spots at least, and a plane fitted through them
+        ring = poly.vertices[list(verts)]
+        here = pts - rho * n  # the touched points on the face
+        candidates = _inside_points(ring, 0.25 * rho)
+        if len(candidates) == 0:  # a sliver (a plane through an edge's touches): its middle
+            candidates = ring.mean(axis=0)[None, :]
+        # the tip centre stays 1.5 ρ above the table
+        candidates = candidates[candidates[:, 2] + rho * n[2] >= 1.5 * rho]
+        if len(candidates) == 0:
+            continue
+        far = np.linalg.norm(candidates[:, None, :] - here[None, :, :], axis=2).min(axis=1)
+        best = int(np.argmax(far))
+        if float(far[best]) < rho:
+            continue  # no second spot a tip radius away: the face is as known as it can be
+        out.append(
+            Probe(
+                _v(candidates[best] + rho * n),
+                _v(n),
+                4.0 * rho,
+                f"{_SPOT} at {_name(here.mean(axis=0) * 1000.0)} mm",
+            )
+        )
+    return out
+
+
+def _inside_points(ring: FloatArray, margin: float, steps: int = 4) -> FloatArray:
+    """Points of the convex polygon ``ring`` at least about ``margin`` inside its edges: its
+    middle, and the points 1/``steps`` … of the way from it to each corner and to each
+    edge's middle, those within ``margin`` of an edge left out."""
+    middle = ring.mean(axis=0)
+    ends = np.vstack([ring, 0.5 * (ring + np.roll(ring, -1, axis=0))])
+    t = np.arange(1, steps + 1)[:, None, None] / (steps + 1)
+    pts = np.vstack([middle[None, :], (middle + t * (ends - middle)).reshape(-1, 3)])
+    # distance of each point from each edge line (the polygon is convex and planar)
+    a, b = ring, np.roll(ring, -1, axis=0)
+    e = b - a
+    length = np.linalg.norm(e, axis=1)
+    keep = length > 1e-12
+    a, e, length = a[keep], e[keep], length[keep]
+    rel = pts[:, None, :] - a[None, :, :]
+    along = (rel * e[None, :, :]).sum(axis=2) / length**2
+    foot = a[None, :, :] + along[:, :, None] * e[None, :, :]
+    inside = np.linalg.norm(pts[:, None, :] - foot, axis=2).min(axis=1) >= margin
+    out: FloatArray = pts[inside]
+    return out
 
 
 def _beyond_model_probes(model: ObjectModel, rho: float) -> list[Probe]:
@@ -499,7 +588,7 @@ def corner_probes(model: ObjectModel) -> list[Probe]:
             continue
         n = n / float(np.linalg.norm(n))
         if len(around) > len(normals) or n[2] < -0.2:
-            continue  # on the table or under the object: the bottom probes' business
+            continue  # on the table or under the object: see below, and the bottom probes
         depth = _ray_into(hull, v, -n)
         if depth is None:  # the line misses what was touched: aim at its middle instead
             n = v - middle
@@ -511,7 +600,83 @@ def corner_probes(model: ObjectModel) -> list[Probe]:
         out.append(
             Probe(_v(target), _v(n), depth + 2.0 * rho, f"{_CORNER} at {_name(v * 1000.0)} mm")
         )
+    for p in _table_corner_probes(model, hull, table):
+        if not any(float(f.normal_array @ np.asarray(p.target)) - f.offset > tol for f in concave):
+            out.append(p)
     return out
+
+
+def _table_corner_probes(model: ObjectModel, hull: ConvexHull, table: set[int]) -> list[Probe]:
+    """Level probes of the model's corners on the table that jut out sideways beyond
+    everything touched: further than 2 ρ + 3 σ, 5 % of the model's diameter and
+    :data:`CORNER_OUTLIER` × the median of the table corners outside the convex hull of the
+    touched points seen from above.
+
+    Seen from above, the table corners of a lying prism or pyramid lie under its touched
+    sides (inside that outline); a corner far outside it is where the planes of touched
+    sides run on past a face nobody touched (a lying frustum's overhanging end).
+    """
+    poly = model.polyhedron
+    assert poly is not None
+    rho, sigma = model.record.tip_radius, model.record.noise
+    pts = np.asarray([c.point for c in model.record.contacts], dtype=float)[:, :2]
+    try:
+        outline = ConvexHull(pts)
+    except (QhullError, ValueError):
+        return []
+    verts = np.asarray(poly.vertices, dtype=float)
+    size = float(np.linalg.norm(np.ptp(verts, axis=0)))
+    limit = max(2.0 * rho + 3.0 * sigma, 0.05 * size)
+    out = (verts[:, :2] @ outline.equations[:, :2].T + outline.equations[:, 2]).max(axis=1)
+    around = [[k for k, face in enumerate(poly.faces) if i in face] for i in range(len(verts))]
+    on_table = [i for i in range(len(verts)) if any(k in table for k in around[i])]
+    if not on_table:
+        return []
+    # the table corners of a model whose sides were all touched lie alike outside that
+    # outline (the layers' spacing): an outlier among them is tested
+    limit = max(limit, CORNER_OUTLIER * float(np.median(out[on_table])))
+    probes = []
+    for i in sorted(on_table, key=lambda j: -float(out[j])):
+        if float(out[i]) <= limit:
+            break
+        sides = [k for k in around[i] if k not in table]
+        if not sides or float(poly.normals[sides, 2].min()) < -0.05:
+            continue
+        n = poly.normals[sides].sum(axis=0)
+        probe = _table_corner_probe(verts[i], n, hull, rho)
+        if probe is not None:
+            probes.append(probe)
+    return probes
+
+
+def _table_corner_probe(v: FloatArray, n: FloatArray, hull: ConvexHull, rho: float) -> Probe | None:
+    """A level probe of a modelled corner ``v`` on the table that juts out (``n``: its side
+    faces' mean normal): the tip centre 1.5 ρ above the table, approaching horizontally
+    along ``n`` as far in as the touched points' middle, plus 2 ρ.
+
+    A face nobody touched that cuts such a corner (a lying frustum's overhanging end) is
+    found by the vertical finger's side, with no indexed head: its quantised normal is level,
+    and the one-height probes then give it a second height.
+    """
+    n = n / max(float(np.linalg.norm(n)), 1e-12)
+    flat = np.array([n[0], n[1], 0.0])
+    if float(np.linalg.norm(flat)) < 0.3:
+        return None  # a corner facing up or down: no level approach reaches it
+    flat = flat / float(np.linalg.norm(flat))
+    z = 1.5 * rho
+    start = np.array([v[0], v[1], z])
+    # as far in as the touched points' middle (the tip stops at whatever it meets)
+    middle = np.asarray(hull.points, dtype=float).mean(axis=0)
+    depth = float((v - middle)[:2] @ flat[:2])
+    if depth <= 0.0:
+        return None
+    return Probe(
+        _v(start + rho * flat),
+        _v(flat),
+        depth + 2.0 * rho,
+        f"{_CORNER} at {_name(v * 1000.0)} mm",
+        facing=_v((np.array([0.0, 0.0, 1.0]) - flat) / math.sqrt(2.0)),
+    )
 
 
 def _modelled_face(model: ObjectModel, k: int) -> tuple[Face, FloatArray] | None:
@@ -906,6 +1071,7 @@ class ModelCompleter:
         self._tried: Counter[str] = Counter()
         self._path_probes = 0
         self._corner_probes = 0
+        self._spot_probes = 0
         self.probes = 0
         self._last: tuple[str, ObjectModel] | None = None
 
@@ -995,6 +1161,8 @@ class ModelCompleter:
         self._tried[probe.reason] += 1
         if probe.reason.startswith(_CORNER):
             self._corner_probes += 1
+        elif probe.reason.startswith(_SPOT):
+            self._spot_probes += 1
         elif probe.reason.startswith(_TESTS):
             self._path_probes += 1
         return probe
@@ -1019,6 +1187,8 @@ class ModelCompleter:
             return False
         if p.reason.startswith(_CORNER):
             return self._corner_probes < CORNER_PROBES
+        if p.reason.startswith(_SPOT):
+            return self._spot_probes < current().explore.spot_probes
         return self._path_probes < PATH_PROBES
 
 

@@ -191,6 +191,19 @@ class ExploreSettings(_Group):
         description="Probes for one open item (a direction, a face) before the completion "
         "names it unreachable.",
     )
+    spot_rho: float = Field(
+        2.0,
+        gt=0,
+        description="Tip radii: a face whose tip centres all lie within this distance of each "
+        "other in its plane was touched at one spot only (one probe and its short slide); the "
+        "completion touches it once more, as far from there as the face allows.",
+    )
+    spot_probes: int = Field(
+        6,
+        ge=0,
+        description="At most this many second-spot probes per exploration (a face touched at "
+        "one spot, touched again elsewhere); 0: none.",
+    )
 
 
 class GeometrySettings(_Group):
