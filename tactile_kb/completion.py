@@ -80,6 +80,7 @@ _PATH = "the path passes inside the model"
 _HINT = "the hint reaches beyond the model"
 _CORNER = "a corner juts out"
 _SPOT = "a face touched at one spot"
+_LEVEL_NZ = math.sin(math.radians(3.0))
 _TESTS = (_PATH, _HINT, _CORNER, _SPOT)  # tests of the model, never holding the completion open
 
 PATH_PROBES = 4
@@ -630,7 +631,8 @@ def _table_corner_probes(model: ObjectModel, hull: ConvexHull, table: set[int]) 
     out = (verts[:, :2] @ outline.equations[:, :2].T + outline.equations[:, 2]).max(axis=1)
     around = [[k for k, face in enumerate(poly.faces) if i in face] for i in range(len(verts))]
     on_table = [i for i in range(len(verts)) if any(k in table for k in around[i])]
-    if not on_table:
+    sides = [k for k in range(len(poly.faces)) if k not in table]
+    if not on_table or float(poly.normals[sides, 2].min()) < -_LEVEL_NZ:
         return []
     # the table corners of a model whose sides were all touched lie alike outside that
     # outline (the layers' spacing): an outlier among them is tested
@@ -640,7 +642,7 @@ def _table_corner_probes(model: ObjectModel, hull: ConvexHull, table: set[int]) 
         if float(out[i]) <= limit:
             break
         sides = [k for k in around[i] if k not in table]
-        if not sides or float(poly.normals[sides, 2].min()) < -0.05:
+        if not sides:
             continue
         n = poly.normals[sides].sum(axis=0)
         probe = _table_corner_probe(verts[i], n, hull, rho)
