@@ -16,10 +16,12 @@ the missing normal from outside the object), until
   nothing, were blocked on the way, or did not close it (``"unreachable"``).
 
 A closed model can still be wrong: a face no touch found is cut off, and its neighbours'
-planes meet in a corner where the object is not. Probes that test the model (where the
-contour's free path passed inside it, where the visual hint reaches beyond it, and at corners
-that jut out from the touched points: :func:`corner_probes`) are each tried once, within the
-same budget, and never hold the completion open.
+planes meet in a corner where the object is not; a face known from one touch (a probe and its
+short slide) has a plane that tilts by degrees. Probes that test the model (a second spot on
+a face known from one: :func:`second_spot_probes`; where the contour's free path passed inside
+it, where the visual hint reaches beyond it, and at corners that jut out from the touched
+points: :func:`corner_probes`) are each tried once, within the same budget, and never hold
+the completion open.
 
 The record says which happened (``record.ending``, ``record.unreachable`` and a note). The
 controller computes no geometry: it carries out probes given as plain values; this module,
@@ -80,7 +82,6 @@ _PATH = "the path passes inside the model"
 _HINT = "the hint reaches beyond the model"
 _CORNER = "a corner juts out"
 _SPOT = "a face touched at one spot"
-_LEVEL_NZ = math.sin(math.radians(3.0))
 _TESTS = (_PATH, _HINT, _CORNER, _SPOT)  # tests of the model, never holding the completion open
 
 PATH_PROBES = 4
@@ -169,7 +170,9 @@ def completion_probes(model: ObjectModel, *, height_gap: float | None = None) ->
       faces yet. Directions under the object (the table's side) are not probed.
     * Closed: one probe per side face whose tip centres lie at one height, at the other end
       of the face's height range (faces lower than the tip's diameter are left as they are),
-      and two from above beside a top whose tip centres lie along one line (a ridge).
+      and two from above beside a top whose tip centres lie along one line (a ridge); then
+      tests of the model: a second spot on each face known from one spot
+      (:func:`second_spot_probes`), and the path, hint and corner checks.
     """
     record = model.record
     rho = record.tip_radius
@@ -540,10 +543,9 @@ def corner_probes(model: ObjectModel) -> list[Probe]:
     may go on past it until the line enters the touched hull, plus 2 ρ (when that line misses
     the hull, it aims from the corner at the hull's middle instead). A touch at the corner
     confirms it (and puts it in the touched hull); a touch deeper in is a face the model lacks,
-    which the next model has. Corners on the table, or whose direction points down, are left
-    to the probes near the table (:func:`_bottom_probes`): a single touch of an undercut, made
-    with the head indexed, gives the sensor's quantised normal and no slide, and measured on
-    the stable poses it spoilt more models than it mended.
+    which the next model has. Corners whose direction points down are left to the probes near
+    the table (:func:`_bottom_probes`); corners on the table get level probes
+    (:func:`_table_corner_probes`) when no side of the model overhangs.
     """
     poly = model.polyhedron
     record = model.record
@@ -616,6 +618,14 @@ def _table_corner_probes(model: ObjectModel, hull: ConvexHull, table: set[int]) 
     Seen from above, the table corners of a lying prism or pyramid lie under its touched
     sides (inside that outline); a corner far outside it is where the planes of touched
     sides run on past a face nobody touched (a lying frustum's overhanging end).
+
+    Asked only of a model none of whose sides overhangs (turns down by more than
+    ``explore.overhang_deg``): then the object lies inside the model, and a table corner far
+    from every touch can only be cut off by a face not found yet. A side that overhangs
+    puts the model's table corners where its plane, known from a touch or two, meets the
+    table; a level probe there meets the undercut's edge, whose touches fit no face (the
+    lying hexagonal pyramids of the stable-pose benchmark), so those corners are left to
+    :func:`_bottom_probes` and :func:`second_spot_probes`.
     """
     poly = model.polyhedron
     assert poly is not None
@@ -632,7 +642,8 @@ def _table_corner_probes(model: ObjectModel, hull: ConvexHull, table: set[int]) 
     around = [[k for k, face in enumerate(poly.faces) if i in face] for i in range(len(verts))]
     on_table = [i for i in range(len(verts)) if any(k in table for k in around[i])]
     sides = [k for k in range(len(poly.faces)) if k not in table]
-    if not on_table or float(poly.normals[sides, 2].min()) < -_LEVEL_NZ:
+    overhang = math.sin(math.radians(current().explore.overhang_deg))
+    if not on_table or float(poly.normals[sides, 2].min()) < -overhang:
         return []
     # the table corners of a model whose sides were all touched lie alike outside that
     # outline (the layers' spacing): an outlier among them is tested
@@ -656,9 +667,10 @@ def _table_corner_probe(v: FloatArray, n: FloatArray, hull: ConvexHull, rho: flo
     faces' mean normal): the tip centre 1.5 ρ above the table, approaching horizontally
     along ``n`` as far in as the touched points' middle, plus 2 ρ.
 
-    A face nobody touched that cuts such a corner (a lying frustum's overhanging end) is
-    found by the vertical finger's side, with no indexed head: its quantised normal is level,
-    and the one-height probes then give it a second height.
+    A face nobody touched that cuts such a corner (a lying frustum's overhanging end) faces
+    outwards and down: the head is indexed so that the tip points inwards and up (as for a
+    blind contact, :func:`_blind_probes`), and a sensor facing the face fires. Its one touch
+    is then confirmed elsewhere (:func:`second_spot_probes`).
     """
     n = n / max(float(np.linalg.norm(n)), 1e-12)
     flat = np.array([n[0], n[1], 0.0])

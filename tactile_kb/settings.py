@@ -204,6 +204,14 @@ class ExploreSettings(_Group):
         description="At most this many second-spot probes per exploration (a face touched at "
         "one spot, touched again elsewhere); 0: none.",
     )
+    overhang_deg: float = Field(
+        3.0,
+        ge=0,
+        lt=90,
+        description="Degrees: a side whose normal points down by more than this overhangs. "
+        "The model's corners on the table are checked by level probes only when no side "
+        "overhangs (an undercut's table corners are the probes near the table's business).",
+    )
 
 
 class GeometrySettings(_Group):

@@ -42,6 +42,7 @@ DOCUMENTED: dict[str, dict[str, float | str]] = {
         "completion_attempts": 2,
         "spot_rho": 2.0,
         "spot_probes": 6,
+        "overhang_deg": 3.0,
     },
     "geometry": {
         "cut_deg": 15.0,
