@@ -279,7 +279,11 @@ def second_spot_probes(model: ObjectModel) -> list[Probe]:
     line) tilts by degrees under noise, and a plane that is wrong there moves the model's
     corners far from the object (an undercut face of a lying pyramid met once by an indexed
     probe). A face counts as touched at one spot when all its tip centres lie within
-    ``explore.spot_rho`` × ρ of each other in its plane. The second probe is aimed at the
+    ``explore.spot_rho`` × ρ of each other in its plane, or its plane is the sensor's
+    (not fitted: the centres lie along a line, or are too few); it is probed again only when
+    its normal's estimated uncertainty (:attr:`~tactile_kb.geometry.planes.Face.normal_uncertainty_deg`)
+    is at least ``explore.spot_deg`` (exact touches fix a plane over one spot already, and a
+    second probe of such a face, near an edge, only risks touching the edge). The second probe is aimed at the
     point of the face's polygon, pulled halfway to its middle, furthest from the first spot,
     and approached along the face's normal (the head indexed when the face overhangs): its
     touch confirms the plane, or, landing elsewhere, corrects it. Faces whose polygon has no
@@ -306,8 +310,9 @@ def second_spot_probes(model: ObjectModel) -> list[Probe]:
             continue
         pts = centres[list(face.contacts)]
         flat = pts - np.outer(pts @ n, n)  # the tip centres seen along the normal
-        if face.refined and (
-            float(np.linalg.norm(flat[:, None, :] - flat[None, :, :], axis=2).max()) >= spot
+        if face.normal_uncertainty_deg < current().explore.spot_deg or (
+            face.refined
+            and float(np.linalg.norm(flat[:, None, :] - flat[None, :, :], axis=2).max()) >= spot
         ):
             continue  # touched at two spots at least, and a plane fitted through them
         ring = poly.vertices[list(verts)]

@@ -198,6 +198,12 @@ class ExploreSettings(_Group):
         "other in its plane was touched at one spot only (one probe and its short slide); the "
         "completion touches it once more, as far from there as the face allows.",
     )
+    spot_deg: float = Field(
+        2.0,
+        ge=0,
+        description="Degrees: a face touched at one spot is probed at a second one only when "
+        "its normal's estimated uncertainty is at least this.",
+    )
     spot_probes: int = Field(
         6,
         ge=0,
