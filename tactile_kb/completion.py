@@ -279,17 +279,22 @@ def second_spot_probes(model: ObjectModel) -> list[Probe]:
     line) tilts by degrees under noise, and a plane that is wrong there moves the model's
     corners far from the object (an undercut face of a lying pyramid met once by an indexed
     probe). A face counts as touched at one spot when all its tip centres lie within
-    ``explore.spot_rho`` × ρ of each other in its plane, or its plane is the sensor's
-    (not fitted: the centres lie along a line, or are too few); it is probed again only when
-    its normal's estimated uncertainty (:attr:`~tactile_kb.geometry.planes.Face.normal_uncertainty_deg`)
-    is at least ``explore.spot_deg`` (exact touches fix a plane over one spot already, and a
-    second probe of such a face, near an edge, only risks touching the edge). The second probe is aimed at the
-    point of the face's polygon, pulled halfway to its middle, furthest from the first spot,
-    and approached along the face's normal (the head indexed when the face overhangs): its
-    touch confirms the plane, or, landing elsewhere, corrects it. Faces whose polygon has no
-    such point at least ``spot_rho`` × ρ from the first spot, the table and tops (touched
-    from above along lines: :func:`_top_probes`) get none. Like the corner checks, these
-    test the model and never hold the completion open; at most ``explore.spot_probes`` per
+    ``explore.spot_rho`` × ρ of each other in its plane, or its plane is the sensor's (not
+    fitted: the centres lie along a line, or are too few). It is probed again only when its
+    normal's estimated uncertainty (``Face.normal_uncertainty_deg``) is at least
+    ``explore.spot_deg``: exact touches fix a plane over one spot already, and a second
+    probe of such a face, near an edge, only risks touching the edge.
+
+    The second probe is aimed at the point of the face's polygon nearest its middle that
+    lies ``spot_rho`` × ρ from the first touches, or else the one furthest from them (points
+    sampled from its middle outwards to its corners and its edges' middles, clear of its
+    edges by ρ/4, with the tip 1.5 ρ above the table; a sliver with no such point: its
+    middle): the middle is the least likely to lie off the face when the model's outline of
+    it is wrong (a neighbour's touch there only adds a neighbour's touch). It is approached along the face's normal (the head indexed when the face
+    overhangs): its touch confirms the plane, or, landing elsewhere, corrects it. Faces with
+    no such point at least ρ from the touches, the table and tops (touched from above along
+    lines: :func:`_top_probes`) get none. Like the corner checks, these test the model and
+    never hold the completion open; at most ``explore.spot_probes`` per
     exploration (:class:`ModelCompleter`).
     """
     poly = model.polyhedron
@@ -325,7 +330,10 @@ def second_spot_probes(model: ObjectModel) -> list[Probe]:
         if len(candidates) == 0:
             continue
         far = np.linalg.norm(candidates[:, None, :] - here[None, :, :], axis=2).min(axis=1)
-        best = int(np.argmax(far))
+        # the point nearest the middle (least likely off the face, should the model's outline
+        # be wrong) a spot away from the touches; else the furthest
+        apart = np.flatnonzero(far >= spot)
+        best = int(apart[0]) if len(apart) else int(np.argmax(far))
         if float(far[best]) < rho:
             continue  # no second spot a tip radius away: the face is as known as it can be
         out.append(
@@ -341,8 +349,9 @@ def second_spot_probes(model: ObjectModel) -> list[Probe]:
 
 def _inside_points(ring: FloatArray, margin: float, steps: int = 4) -> FloatArray:
     """Points of the convex polygon ``ring`` at least about ``margin`` inside its edges: its
-    middle, and the points 1/``steps`` … of the way from it to each corner and to each
-    edge's middle, those within ``margin`` of an edge left out."""
+    middle, then the points 1/(``steps`` + 1), 2/(``steps`` + 1) … of the way from it to each
+    corner and to each edge's middle (nearest the middle first), those within ``margin`` of
+    an edge left out."""
     middle = ring.mean(axis=0)
     ends = np.vstack([ring, 0.5 * (ring + np.roll(ring, -1, axis=0))])
     t = np.arange(1, steps + 1)[:, None, None] / (steps + 1)
