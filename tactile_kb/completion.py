@@ -172,7 +172,7 @@ def completion_probes(model: ObjectModel, *, height_gap: float | None = None) ->
       of the face's height range (faces lower than the tip's diameter are left as they are),
       and two from above beside a top whose tip centres lie along one line (a ridge); then
       tests of the model: a second spot on each face known from one spot
-      (:func:`second_spot_probes`), and the path, hint and corner checks.
+      (:func:`second_spot_probes`, after the path, hint and corner checks).
     """
     record = model.record
     rho = record.tip_radius
@@ -262,11 +262,11 @@ def completion_probes(model: ObjectModel, *, height_gap: float | None = None) ->
     # a face left out as concave but touched at one height: its quantised normal may be what
     # made it look concave (an overhanging side read as vertical)
     probes += _one_height_probes(model, centres, rho, gap, concave=True)
-    probes += second_spot_probes(model)
     probes += _low_side_probes(model, centres, rho)
     probes += _beyond_model_probes(model, rho)
     probes += _free_path_probes(model, rho)
     probes += corner_probes(model)
+    probes += second_spot_probes(model)
     return probes
 
 
