@@ -16,10 +16,12 @@ the missing normal from outside the object), until
   nothing, were blocked on the way, or did not close it (``"unreachable"``).
 
 A closed model can still be wrong: a face no touch found is cut off, and its neighbours'
-planes meet in a corner where the object is not. Probes that test the model (where the
-contour's free path passed inside it, where the visual hint reaches beyond it, and at corners
-that jut out from the touched points: :func:`corner_probes`) are each tried once, within the
-same budget, and never hold the completion open.
+planes meet in a corner where the object is not; a face known from one touch (a probe and its
+short slide) has a plane that tilts by degrees. Probes that test the model (a second spot on
+a face known from one: :func:`second_spot_probes`; where the contour's free path passed inside
+it, where the visual hint reaches beyond it, and at corners that jut out from the touched
+points: :func:`corner_probes`) are each tried once, within the same budget, and never hold
+the completion open.
 
 The record says which happened (``record.ending``, ``record.unreachable`` and a note). The
 controller computes no geometry: it carries out probes given as plain values; this module,
@@ -66,6 +68,7 @@ __all__ = [
     "corner_juts",
     "corner_probes",
     "model_completer",
+    "second_spot_probes",
 ]
 
 _SIDES = 8  # horizontal directions checked for a side never touched (every 45°)
@@ -78,7 +81,8 @@ normal no better than its neighbours', and a touch off the line then fits nothin
 _PATH = "the path passes inside the model"
 _HINT = "the hint reaches beyond the model"
 _CORNER = "a corner juts out"
-_TESTS = (_PATH, _HINT, _CORNER)  # probes that test the model, never holding the completion open
+_SPOT = "a face touched at one spot"
+_TESTS = (_PATH, _HINT, _CORNER, _SPOT)  # tests of the model, never holding the completion open
 
 PATH_PROBES = 4
 """At most this many probes per exploration where a contour's path passed inside the model, or
@@ -166,7 +170,9 @@ def completion_probes(model: ObjectModel, *, height_gap: float | None = None) ->
       faces yet. Directions under the object (the table's side) are not probed.
     * Closed: one probe per side face whose tip centres lie at one height, at the other end
       of the face's height range (faces lower than the tip's diameter are left as they are),
-      and two from above beside a top whose tip centres lie along one line (a ridge).
+      and two from above beside a top whose tip centres lie along one line (a ridge); then
+      tests of the model: a second spot on each face known from one spot
+      (:func:`second_spot_probes`, after the path, hint and corner checks).
     """
     record = model.record
     rho = record.tip_radius
@@ -260,7 +266,108 @@ def completion_probes(model: ObjectModel, *, height_gap: float | None = None) ->
     probes += _beyond_model_probes(model, rho)
     probes += _free_path_probes(model, rho)
     probes += corner_probes(model)
+    probes += second_spot_probes(model)
     return probes
+
+
+def second_spot_probes(model: ObjectModel) -> list[Probe]:
+    """Probes of the faces the model knows from one spot only, each at a second spot as far
+    from the first as the face allows.
+
+    A probe's touch and its short slide leave a few tip centres a few millimetres apart: a
+    plane fitted through them (or the sensor's quantised normal, when they lie along one
+    line) tilts by degrees under noise, and a plane that is wrong there moves the model's
+    corners far from the object (an undercut face of a lying pyramid met once by an indexed
+    probe). A face counts as touched at one spot when all its tip centres lie within
+    ``explore.spot_rho`` × ρ of each other in its plane, or its plane is the sensor's (not
+    fitted: the centres lie along a line, or are too few). It is probed again only when its
+    normal's estimated uncertainty (``Face.normal_uncertainty_deg``) is at least
+    ``explore.spot_deg``: exact touches fix a plane over one spot already, and a second
+    probe of such a face, near an edge, only risks touching the edge.
+
+    The second probe is aimed at the point of the face's polygon nearest its middle that
+    lies ``spot_rho`` × ρ from the first touches, or else the one furthest from them (points
+    sampled from its middle outwards to its corners and its edges' middles, clear of its
+    edges by ρ/4, with the tip 1.5 ρ above the table; a sliver with no such point: its
+    middle): the middle is the least likely to lie off the face when the model's outline of
+    it is wrong (a neighbour's touch there only adds a neighbour's touch). It is approached along the face's normal (the head indexed when the face
+    overhangs): its touch confirms the plane, or, landing elsewhere, corrects it. Faces with
+    no such point at least ρ from the touches, the table and tops (touched from above along
+    lines: :func:`_top_probes`) get none. Like the corner checks, these test the model and
+    never hold the completion open; at most ``explore.spot_probes`` per
+    exploration (:class:`ModelCompleter`).
+    """
+    poly = model.polyhedron
+    record = model.record
+    if poly is None or not record.contacts:
+        return []
+    rho = record.tip_radius
+    spot = current().explore.spot_rho * rho
+    centres = np.asarray([c.centre for c in record.contacts], dtype=float).reshape(-1, 3)
+    top_nz = current().explore.top_nz
+    out = []
+    for k, verts in enumerate(poly.faces):
+        found = _modelled_face(model, k)
+        if found is None:
+            continue
+        face, n = found
+        if face.source != "contacts" or not face.contacts or n[2] >= top_nz:
+            continue
+        pts = centres[list(face.contacts)]
+        flat = pts - np.outer(pts @ n, n)  # the tip centres seen along the normal
+        if face.normal_uncertainty_deg < current().explore.spot_deg or (
+            face.refined
+            and float(np.linalg.norm(flat[:, None, :] - flat[None, :, :], axis=2).max()) >= spot
+        ):
+            continue  # touched at two spots at least, and a plane fitted through them
+        ring = poly.vertices[list(verts)]
+        here = pts - rho * n  # the touched points on the face
+        candidates = _inside_points(ring, 0.25 * rho)
+        if len(candidates) == 0:  # a sliver (a plane through an edge's touches): its middle
+            candidates = ring.mean(axis=0)[None, :]
+        # the tip centre stays 1.5 ρ above the table
+        candidates = candidates[candidates[:, 2] + rho * n[2] >= 1.5 * rho]
+        if len(candidates) == 0:
+            continue
+        far = np.linalg.norm(candidates[:, None, :] - here[None, :, :], axis=2).min(axis=1)
+        # the point nearest the middle (least likely off the face, should the model's outline
+        # be wrong) a spot away from the touches; else the furthest
+        apart = np.flatnonzero(far >= spot)
+        best = int(apart[0]) if len(apart) else int(np.argmax(far))
+        if float(far[best]) < rho:
+            continue  # no second spot a tip radius away: the face is as known as it can be
+        out.append(
+            Probe(
+                _v(candidates[best] + rho * n),
+                _v(n),
+                4.0 * rho,
+                f"{_SPOT} at {_name(here.mean(axis=0) * 1000.0)} mm",
+            )
+        )
+    return out
+
+
+def _inside_points(ring: FloatArray, margin: float, steps: int = 4) -> FloatArray:
+    """Points of the convex polygon ``ring`` at least about ``margin`` inside its edges: its
+    middle, then the points 1/(``steps`` + 1), 2/(``steps`` + 1) … of the way from it to each
+    corner and to each edge's middle (nearest the middle first), those within ``margin`` of
+    an edge left out."""
+    middle = ring.mean(axis=0)
+    ends = np.vstack([ring, 0.5 * (ring + np.roll(ring, -1, axis=0))])
+    t = np.arange(1, steps + 1)[:, None, None] / (steps + 1)
+    pts = np.vstack([middle[None, :], (middle + t * (ends - middle)).reshape(-1, 3)])
+    # distance of each point from each edge line (the polygon is convex and planar)
+    a, b = ring, np.roll(ring, -1, axis=0)
+    e = b - a
+    length = np.linalg.norm(e, axis=1)
+    keep = length > 1e-12
+    a, e, length = a[keep], e[keep], length[keep]
+    rel = pts[:, None, :] - a[None, :, :]
+    along = (rel * e[None, :, :]).sum(axis=2) / length**2
+    foot = a[None, :, :] + along[:, :, None] * e[None, :, :]
+    inside = np.linalg.norm(pts[:, None, :] - foot, axis=2).min(axis=1) >= margin
+    out: FloatArray = pts[inside]
+    return out
 
 
 def _beyond_model_probes(model: ObjectModel, rho: float) -> list[Probe]:
@@ -450,10 +557,9 @@ def corner_probes(model: ObjectModel) -> list[Probe]:
     may go on past it until the line enters the touched hull, plus 2 ρ (when that line misses
     the hull, it aims from the corner at the hull's middle instead). A touch at the corner
     confirms it (and puts it in the touched hull); a touch deeper in is a face the model lacks,
-    which the next model has. Corners on the table, or whose direction points down, are left
-    to the probes near the table (:func:`_bottom_probes`): a single touch of an undercut, made
-    with the head indexed, gives the sensor's quantised normal and no slide, and measured on
-    the stable poses it spoilt more models than it mended.
+    which the next model has. Corners whose direction points down are left to the probes near
+    the table (:func:`_bottom_probes`); corners on the table get level probes
+    (:func:`_table_corner_probes`) when no side of the model overhangs.
     """
     poly = model.polyhedron
     record = model.record
@@ -499,7 +605,7 @@ def corner_probes(model: ObjectModel) -> list[Probe]:
             continue
         n = n / float(np.linalg.norm(n))
         if len(around) > len(normals) or n[2] < -0.2:
-            continue  # on the table or under the object: the bottom probes' business
+            continue  # on the table or under the object: see below, and the bottom probes
         depth = _ray_into(hull, v, -n)
         if depth is None:  # the line misses what was touched: aim at its middle instead
             n = v - middle
@@ -511,7 +617,94 @@ def corner_probes(model: ObjectModel) -> list[Probe]:
         out.append(
             Probe(_v(target), _v(n), depth + 2.0 * rho, f"{_CORNER} at {_name(v * 1000.0)} mm")
         )
+    for p in _table_corner_probes(model, hull, table):
+        if not any(float(f.normal_array @ np.asarray(p.target)) - f.offset > tol for f in concave):
+            out.append(p)
     return out
+
+
+def _table_corner_probes(model: ObjectModel, hull: ConvexHull, table: set[int]) -> list[Probe]:
+    """Level probes of the model's corners on the table that jut out sideways beyond
+    everything touched: further than 2 ρ + 3 σ, 5 % of the model's diameter and
+    :data:`CORNER_OUTLIER` × the median of the table corners outside the convex hull of the
+    touched points seen from above.
+
+    Seen from above, the table corners of a lying prism or pyramid lie under its touched
+    sides (inside that outline); a corner far outside it is where the planes of touched
+    sides run on past a face nobody touched (a lying frustum's overhanging end).
+
+    Asked only of a model none of whose sides overhangs (turns down by more than
+    ``explore.overhang_deg``): then the object lies inside the model, and a table corner far
+    from every touch can only be cut off by a face not found yet. A side that overhangs
+    puts the model's table corners where its plane, known from a touch or two, meets the
+    table; a level probe there meets the undercut's edge, whose touches fit no face (the
+    lying hexagonal pyramids of the stable-pose benchmark), so those corners are left to
+    :func:`_bottom_probes` and :func:`second_spot_probes`.
+    """
+    poly = model.polyhedron
+    assert poly is not None
+    rho, sigma = model.record.tip_radius, model.record.noise
+    pts = np.asarray([c.point for c in model.record.contacts], dtype=float)[:, :2]
+    try:
+        outline = ConvexHull(pts)
+    except (QhullError, ValueError):
+        return []
+    verts = np.asarray(poly.vertices, dtype=float)
+    size = float(np.linalg.norm(np.ptp(verts, axis=0)))
+    limit = max(2.0 * rho + 3.0 * sigma, 0.05 * size)
+    out = (verts[:, :2] @ outline.equations[:, :2].T + outline.equations[:, 2]).max(axis=1)
+    around = [[k for k, face in enumerate(poly.faces) if i in face] for i in range(len(verts))]
+    on_table = [i for i in range(len(verts)) if any(k in table for k in around[i])]
+    sides = [k for k in range(len(poly.faces)) if k not in table]
+    overhang = math.sin(math.radians(current().explore.overhang_deg))
+    if not on_table or float(poly.normals[sides, 2].min()) < -overhang:
+        return []
+    # the table corners of a model whose sides were all touched lie alike outside that
+    # outline (the layers' spacing): an outlier among them is tested
+    limit = max(limit, CORNER_OUTLIER * float(np.median(out[on_table])))
+    probes = []
+    for i in sorted(on_table, key=lambda j: -float(out[j])):
+        if float(out[i]) <= limit:
+            break
+        sides = [k for k in around[i] if k not in table]
+        if not sides:
+            continue
+        n = poly.normals[sides].sum(axis=0)
+        probe = _table_corner_probe(verts[i], n, hull, rho)
+        if probe is not None:
+            probes.append(probe)
+    return probes
+
+
+def _table_corner_probe(v: FloatArray, n: FloatArray, hull: ConvexHull, rho: float) -> Probe | None:
+    """A level probe of a modelled corner ``v`` on the table that juts out (``n``: its side
+    faces' mean normal): the tip centre 1.5 ρ above the table, approaching horizontally
+    along ``n`` as far in as the touched points' middle, plus 2 ρ.
+
+    A face nobody touched that cuts such a corner (a lying frustum's overhanging end) faces
+    outwards and down: the head is indexed so that the tip points inwards and up (as for a
+    blind contact, :func:`_blind_probes`), and a sensor facing the face fires. Its one touch
+    is then confirmed elsewhere (:func:`second_spot_probes`).
+    """
+    n = n / max(float(np.linalg.norm(n)), 1e-12)
+    flat = np.array([n[0], n[1], 0.0])
+    if float(np.linalg.norm(flat)) < 0.3:
+        return None  # a corner facing up or down: no level approach reaches it
+    flat = flat / float(np.linalg.norm(flat))
+    z = 1.5 * rho
+    start = np.array([v[0], v[1], z])
+    # as far in as the touched points' middle (the tip stops at whatever it meets)
+    middle = np.asarray(hull.points, dtype=float).mean(axis=0)
+    depth = float((v - middle)[:2] @ flat[:2])
+    if depth <= 0.0:
+        return None
+    return Probe(
+        _v(start + rho * flat),
+        _v(flat),
+        depth + 2.0 * rho,
+        f"{_CORNER} at {_name(v * 1000.0)} mm",
+        facing=_v((np.array([0.0, 0.0, 1.0]) - flat) / math.sqrt(2.0)),
+    )
 
 
 def _modelled_face(model: ObjectModel, k: int) -> tuple[Face, FloatArray] | None:
@@ -906,6 +1099,7 @@ class ModelCompleter:
         self._tried: Counter[str] = Counter()
         self._path_probes = 0
         self._corner_probes = 0
+        self._spot_probes = 0
         self.probes = 0
         self._last: tuple[str, ObjectModel] | None = None
 
@@ -995,6 +1189,8 @@ class ModelCompleter:
         self._tried[probe.reason] += 1
         if probe.reason.startswith(_CORNER):
             self._corner_probes += 1
+        elif probe.reason.startswith(_SPOT):
+            self._spot_probes += 1
         elif probe.reason.startswith(_TESTS):
             self._path_probes += 1
         return probe
@@ -1019,6 +1215,8 @@ class ModelCompleter:
             return False
         if p.reason.startswith(_CORNER):
             return self._corner_probes < CORNER_PROBES
+        if p.reason.startswith(_SPOT):
+            return self._spot_probes < current().explore.spot_probes
         return self._path_probes < PATH_PROBES
 
 

@@ -191,6 +191,33 @@ class ExploreSettings(_Group):
         description="Probes for one open item (a direction, a face) before the completion "
         "names it unreachable.",
     )
+    spot_rho: float = Field(
+        2.0,
+        gt=0,
+        description="Tip radii: a face whose tip centres all lie within this distance of each "
+        "other in its plane was touched at one spot only (one probe and its short slide); the "
+        "completion touches it once more, as far from there as the face allows.",
+    )
+    spot_deg: float = Field(
+        2.0,
+        ge=0,
+        description="Degrees: a face touched at one spot is probed at a second one only when "
+        "its normal's estimated uncertainty is at least this.",
+    )
+    spot_probes: int = Field(
+        6,
+        ge=0,
+        description="At most this many second-spot probes per exploration (a face touched at "
+        "one spot, touched again elsewhere); 0: none.",
+    )
+    overhang_deg: float = Field(
+        3.0,
+        ge=0,
+        lt=90,
+        description="Degrees: a side whose normal points down by more than this overhangs. "
+        "The model's corners on the table are checked by level probes only when no side "
+        "overhangs (an undercut's table corners are the probes near the table's business).",
+    )
 
 
 class GeometrySettings(_Group):

@@ -40,6 +40,10 @@ DOCUMENTED: dict[str, dict[str, float | str]] = {
         "completion_touches": 24,
         "completion_path": 4.0,
         "completion_attempts": 2,
+        "spot_rho": 2.0,
+        "spot_deg": 2.0,
+        "spot_probes": 6,
+        "overhang_deg": 3.0,
     },
     "geometry": {
         "cut_deg": 15.0,
