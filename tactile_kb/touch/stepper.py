@@ -74,6 +74,9 @@ _EPS_T = 1e-12
 _BATCH = 48  # sensor states evaluated together along a motion
 _DENSE_STRIDE = 8  # on a dense mesh, sensor states are first sampled every 8th gap
 _CONTACT_CACHE = 64  # single-point contact sets kept (see StepperWorld._contacts)
+_MAX_PIECES = 200  # straight pieces of one compliant slide (see StepperWorld._comply)
+_SIDE = 0.5  # a surface whose normal's horizontal part is below this (more than 60° from
+# vertical) is a top: a compliant slide on it lifts and presses along its normal, not across
 
 DENSE_FACES = 4000
 """Meshes with more triangles than this are searched through k-d trees: a motion meets only the
@@ -681,7 +684,178 @@ class StepperWorld:
             t /= norm
             if float(t @ cmd) < 0:
                 t = -t
-        return self._run("slide", _v3(a), _v3(t), length)
+        m = self._run("slide", _v3(a), _v3(t), length)
+        if current().world.comply_deg <= 0.0:
+            return m
+        return self._comply(m, n, sensor, float(length))
+
+    def _comply(self, first: Motion, n0: FloatArray, sensor: int, length: float) -> Motion:
+        """The compliant slide that began with the straight slide ``first`` along the surface of
+        outward normal ``n0`` under ``sensor``.
+
+        A finger under force control rides over irregularities smaller than its tip: its centre
+        follows the surface offset by ρ while the followed sensor stays pressed. Where a
+        straight piece stops without a sensor change (``"blocked"`` by a bump or a crease of
+        a scan's triangles) the tip turns to the tangent of the contact that blocks it; where
+        it loses the surface (the followed sensor opens: a dip, or a crease turning away) it
+        lifts off by ``comply_depth`` ρ, steps on by ``comply_step`` ρ and presses back (a
+        ride, :meth:`_ride_on`). Either is taken only when the surface met there turns at most
+        :attr:`~tactile_kb.settings.WorldSettings.comply_deg` from ``n0`` and, after a ride,
+        the followed sensor fires again. On a side (a normal within 60° of horizontal) the
+        tip stays at constant z; on a top it lifts and presses along the normal and a bump
+        turns the slide up its slope. Otherwise the slide ends as the straight piece
+        ended: at a real edge, a real corner or a wall the surface turns further (past a
+        convex edge the surface a ride finds has turned by at least asin(comply_step)), so a
+        polyhedron's slides end exactly where straight slides end.
+
+        The motion's ``distance`` is the length of the path, its ``direction`` the last
+        piece's; a ride that finds the sensors changed (a neighbouring sensor closed or
+        opened while the followed one stays ON) ends the motion there with that event.
+        """
+        cos_max = math.cos(math.radians(current().world.comply_deg))
+        fired0 = first.fired_start
+        start = np.asarray(first.start, dtype=float)
+        m = first
+        travelled = first.distance
+        stalls = 0
+        for _ in range(_MAX_PIECES):
+            if travelled >= length - 1e-12 or m.event not in ("blocked", "release"):
+                break
+            if m.event == "release" and sensor in m.fired:
+                break  # another surface's sensor opened: the servo decides
+            here = np.asarray(m.end, dtype=float)
+            u = np.asarray(m.direction, dtype=float)
+            if m.event == "blocked":
+                turned = self._conform(here, u, n0, cos_max)
+                if turned is None:
+                    break
+                pos, t, hop = here, turned, 0.0
+            else:
+                ridden = self._ride_on(here, u, n0, sensor, cos_max)
+                if ridden is None:
+                    break
+                pos, t, hop, fired = ridden
+                if fired != fired0 or travelled + hop >= length - 1e-12:
+                    # the sensors changed where the surface was regained, or the ride went
+                    # the whole length
+                    return self._joined(start, pos, u, travelled + hop, fired0, fired)
+            nxt = self._run("slide", _v3(pos), _v3(t), length - travelled - hop)
+            stalls = stalls + 1 if hop + nxt.distance < 1e-9 else 0
+            if stalls >= 4:  # turning on the spot: the surface does not let the tip on
+                break
+            m = nxt
+            travelled += hop + nxt.distance
+        if m is first:
+            return first
+        return Motion(
+            kind="slide",
+            start=first.start,
+            end=m.end,
+            direction=m.direction,
+            distance=float(travelled),
+            event=m.event,
+            fired_start=fired0,
+            fired=m.fired,
+            closed=tuple(sorted(set(m.fired) - set(fired0))),
+            opened=tuple(sorted(set(fired0) - set(m.fired))),
+            measured=m.end,
+        )
+
+    def _joined(
+        self,
+        start: FloatArray,
+        end: FloatArray,
+        direction: FloatArray,
+        distance: float,
+        fired0: tuple[int, ...],
+        fired: tuple[int, ...],
+    ) -> Motion:
+        """A compliant slide that ended after a ride, where its sensors changed (``fired0`` →
+        ``fired``) or its length was travelled."""
+        closed = tuple(sorted(set(fired) - set(fired0)))
+        opened = tuple(sorted(set(fired0) - set(fired)))
+        return Motion(
+            kind="slide",
+            start=_v3(start),
+            end=_v3(end),
+            direction=_v3(direction),
+            distance=float(distance),
+            event="touch" if closed else "release" if opened else "none",
+            fired_start=fired0,
+            fired=fired,
+            closed=closed,
+            opened=opened,
+            measured=_v3(end),
+        )
+
+    @staticmethod
+    def _tangent_of(n: FloatArray, u: FloatArray, side: bool) -> FloatArray | None:
+        """The tangent of a surface of outward normal ``n`` a slide along ``u`` turns to: the
+        horizontal ẑ × n on a side, in ``u``'s sense; on a top, ``u`` projected on the surface."""
+        t = np.array([-n[1], n[0], 0.0]) if side else u - float(u @ n) * n
+        norm = float(np.linalg.norm(t))
+        if norm < 1e-6:
+            return None
+        t /= norm
+        return t if float(t @ u) >= 0.0 else -t
+
+    def _conform(
+        self, here: FloatArray, u: FloatArray, n0: FloatArray, cos_max: float
+    ) -> FloatArray | None:
+        """The direction a slide blocked at ``here`` while moving along ``u`` turns to: the
+        tangent of the contact that blocks it, when that surface turns at most ``comply_deg``
+        from ``n0`` (and the turn is a real one); else None."""
+        contacts = self._contacts(here)
+        if len(contacts) == 0:
+            return None
+        ahead = contacts[int(np.argmax(contacts @ u))]
+        nb = -ahead
+        if float(nb @ n0) < cos_max:
+            return None
+        t = self._tangent_of(nb, u, float(np.hypot(n0[0], n0[1])) >= _SIDE)
+        if t is None or float(t @ u) > 1.0 - 1e-12:
+            return None
+        return t
+
+    def _ride_on(
+        self, here: FloatArray, u: FloatArray, n0: FloatArray, sensor: int, cos_max: float
+    ) -> tuple[FloatArray, FloatArray, float, tuple[int, ...]] | None:
+        """Ride over a dip where a slide along ``u`` lost the surface at ``here``: lift off
+        (horizontally from a side, along ``n0`` from a top) by ``comply_depth`` ρ, step on by ``comply_step`` ρ, press back up to
+        twice as far. Returns (where the surface was regained, the tangent there, the step's
+        length, the sensors ON there), or None when the followed ``sensor`` does not fire
+        there or the surface there turns more than ``comply_deg`` from ``n0``."""
+        world = current().world
+        side = float(np.hypot(n0[0], n0[1])) >= _SIDE
+        out = np.array([n0[0], n0[1], 0.0]) if side else n0.copy()
+        out /= float(np.linalg.norm(out))
+        depth = world.comply_depth * self._rho
+        step = world.comply_step * self._rho
+        pos = here
+        for direction, reach in ((out, depth), (u, step)):
+            done = 0.0
+            while done < reach - 1e-12:  # through losses of contact; anything else: no ride
+                leg = self._run("move", _v3(pos), _v3(direction), reach - done)
+                pos = np.asarray(leg.end, dtype=float)
+                done += leg.distance
+                if leg.event == "none":
+                    break
+                if leg.event != "release" or leg.distance <= 0.0:
+                    return None
+        press = self._run("move", _v3(pos), _v3(-out), 2.0 * depth)
+        if press.event != "touch" or sensor not in press.fired:
+            return None
+        end = np.asarray(press.end, dtype=float)
+        contacts = self._contacts(end)
+        if len(contacts) == 0:
+            return None
+        nq = -contacts[int(np.argmax(contacts @ self._dirs[sensor]))]
+        if float(nq @ n0) < cos_max:
+            return None
+        t = self._tangent_of(nq, u, side)
+        if t is None:
+            return None
+        return end, t, float((end - here) @ u), press.fired
 
     def _changes(
         self, a: FloatArray, u: FloatArray, marks: FloatArray, fired0: tuple[int, ...]
