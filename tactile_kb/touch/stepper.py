@@ -729,7 +729,10 @@ class StepperWorld:
                 turned = self._conform(here, u, n0, cos_max)
                 if turned is None:
                     break
-                pos, t, hop = here, turned, 0.0
+                # off the surface by a few block_tol (far inside the contact band): the piece
+                # starts clear of the triangles it is tangent to, not on their boundary
+                t, nb = turned
+                pos, hop = here + 4.0 * current().world.block_tol * nb, 0.0
             else:
                 ridden = self._ride_on(here, u, n0, sensor, cos_max)
                 if ridden is None:
@@ -801,21 +804,46 @@ class StepperWorld:
 
     def _conform(
         self, here: FloatArray, u: FloatArray, n0: FloatArray, cos_max: float
-    ) -> FloatArray | None:
-        """The direction a slide blocked at ``here`` while moving along ``u`` turns to: the
-        tangent of the contact that blocks it, when that surface turns at most ``comply_deg``
-        from ``n0`` (and the turn is a real one); else None."""
-        contacts = self._contacts(here)
-        if len(contacts) == 0:
-            return None
-        ahead = contacts[int(np.argmax(contacts @ u))]
-        nb = -ahead
-        if float(nb @ n0) < cos_max:
-            return None
-        t = self._tangent_of(nb, u, float(np.hypot(n0[0], n0[1])) >= _SIDE)
-        if t is None or float(t @ u) > 1.0 - 1e-12:
-            return None
-        return t
+    ) -> tuple[FloatArray, FloatArray] | None:
+        """The direction a slide blocked at ``here`` while moving along ``u`` turns to: of the
+        tangents of the contacts there, the one nearest ``u`` that enters none of them (the
+        motion re-projected on the surfaces that block it), when the surface it follows turns
+        at most ``comply_deg`` from ``n0``; with that surface's normal. Else None."""
+        normals = self._normals_at(here)
+        if len(normals) == 0 or float((normals @ u).min()) >= 0.0:
+            return None  # nothing at the tip blocks it (the shaft does): no turn helps
+        side = float(np.hypot(n0[0], n0[1])) >= _SIDE
+        best: tuple[FloatArray, FloatArray] | None = None
+        best_cos = -math.inf
+        for n in normals:
+            t = self._tangent_of(n, u, side)
+            if t is None or float(n @ n0) < cos_max:
+                continue
+            if float((normals @ t).min()) < -1e-9:
+                continue  # it would enter another of the surfaces at the tip
+            c = float(t @ u)
+            if c > best_cos:
+                best, best_cos = (t, n), c
+        return best
+
+    def _normals_at(self, p: FloatArray) -> FloatArray:
+        """Unit outward normals (k, 3) of the surface at every triangle within ρ +
+        CONTACT_TOL of ``p`` (towards ``p`` from the triangle's closest point; the contacts
+        :meth:`_touching` merges are kept apart, since any of them may block a motion)."""
+        r = self._rho + current().world.contact_tol
+        pt = np.asarray(p, dtype=float).reshape(1, 3)
+        ti = np.asarray(
+            self._tree.query_ball_point(pt[0], r + self._tr_max + 1e-9), dtype=np.intp
+        )
+        if len(ti) == 0:
+            return np.zeros((0, 3))
+        self._fill(ti)
+        q, _ = _closest_packed(self._pk[ti], np.repeat(pt, len(ti), axis=0))
+        d = pt - q
+        dist = _norms(d)
+        ok = (dist <= r) & (dist > 1e-12)
+        out: FloatArray = d[ok] / dist[ok, None]
+        return out
 
     def _ride_on(
         self, here: FloatArray, u: FloatArray, n0: FloatArray, sensor: int, cos_max: float
