@@ -57,7 +57,8 @@ def _slide(mesh: trimesh.Trimesh, y0: float = -0.02) -> Motion:
     world = StepperWorld(mesh, FINGER)
     start = (A / 2 + RHO, y0, Z)
     sensor = FINGER.nearest((-1.0, 0.0, 0.0))
-    assert sensor is not None and sensor in world.sense(start)
+    assert sensor is not None
+    assert sensor in world.sense(start)
     return world.slide(start, (0.0, 1.0, 0.0), 0.2, sensor)
 
 

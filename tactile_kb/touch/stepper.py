@@ -832,9 +832,7 @@ class StepperWorld:
         :meth:`_touching` merges are kept apart, since any of them may block a motion)."""
         r = self._rho + current().world.contact_tol
         pt = np.asarray(p, dtype=float).reshape(1, 3)
-        ti = np.asarray(
-            self._tree.query_ball_point(pt[0], r + self._tr_max + 1e-9), dtype=np.intp
-        )
+        ti = np.asarray(self._tree.query_ball_point(pt[0], r + self._tr_max + 1e-9), dtype=np.intp)
         if len(ti) == 0:
             return np.zeros((0, 3))
         self._fill(ti)
