@@ -21,10 +21,7 @@
   z = const. The increments end when contact is no longer kept after one — unless a short
   horizontal search towards the middle of the layer regains it (a face sloping inwards, as on
   a pyramid, loses contact on every step). A face overhanging the finger stops it going up:
-  it steps away from the face, goes up, and searches back (with ``comply``, a touch on the way
-  up by the followed sensor or its neighbours is the same face bulging out: the finger steps
-  off it by 2 ``bump`` and goes on up the whole step, :meth:`Controller._bulge`). In the last
-  plane (the next one
+  it steps away from the face, goes up, and searches back. In the last plane (the next one
   would be over the top) the contour is closed without touching the first surface again:
   when the surface before it ends where the layer began.
 * **Persistence (``comply``).** A finger under force control rides over a scan's bumps and
