@@ -1348,20 +1348,6 @@ class Controller:
             if rest > 1e-9:
                 m = self._move_on(pos, _Z, rest)
                 pos = np.asarray(m.end, dtype=float)
-                if m.event == "touch" and self._bulge(m, f, start_z):
-                    # the same face bulging out a little (a scan's bump): step off it by
-                    # 2 bump, go up the rest of the step, and search back towards the middle
-                    away = _unit(np.array([-f.r0[0], -f.r0[1], 0.0]))
-                    for direction, length in (
-                        (away, 2.0 * self.bump),
-                        (_Z, start_z + self.z_step - float(pos[2])),
-                    ):
-                        m = self._move_on(pos, direction, length)
-                        pos = np.asarray(m.end, dtype=float)
-                        if m.event not in ("none", "release"):
-                            break
-                    else:
-                        return self._regain(pos, f, centre)
                 if m.event == "touch":
                     nf = self._follow(m.closed)
                     self._record(m, nf, "touch")
@@ -1387,23 +1373,6 @@ class Controller:
             return self._regain(pos, f, centre)
         self._note(f"the z increment stopped at {_fmt(m.end)} ({m.event}): layers end")
         return None
-
-    def _bulge(self, m: Motion, f: _Follow, start_z: float) -> bool:
-        """Whether a touch ``m`` on the way up of a z increment from the surface of ``f``
-        (whose contact was lost at once) is that surface bulging out a little, not another
-        surface: ``comply`` is on, the touch came before the step's end, and the sensors that
-        closed are the followed one or its neighbours (within :data:`RIPPLE_DEG`), pointing
-        within :data:`RIDE_DEG` of r0 on average. On an ideal solid a surface met on the way
-        up faces another way (no sensor points up)."""
-        if not self.params.comply or not m.closed:
-            return False
-        if float(m.end[2]) >= start_z + self.z_step - 1e-6:
-            return False
-        cos_n = math.cos(math.radians(current().servo.ripple_deg))
-        if not bool((self._dirs[list(m.closed)] @ self._dirs[f.sensor] >= cos_n).all()):
-            return False
-        mean = _unit(self._dirs[list(m.closed)].sum(axis=0))
-        return float(mean @ f.r0) >= math.cos(math.radians(current().servo.ride_deg))
 
     def _regain(
         self, pos: FloatArray, f: _Follow, centre: FloatArray | None
