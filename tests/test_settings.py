@@ -28,7 +28,7 @@ DOCUMENTED: dict[str, dict[str, float | str]] = {
         "contact_tol": 1e-7,
         "block_tol": 1e-9,
         "same_contact_deg": 1.0,
-        "comply_deg": 12.0,
+        "comply_deg": 0.0,
         "comply_step": 0.8,
         "comply_depth": 0.25,
     },

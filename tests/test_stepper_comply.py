@@ -11,6 +11,7 @@ straight slides of the paper's world) it stops at the irregularity.
 from __future__ import annotations
 
 import math
+from collections.abc import Iterator
 
 import numpy as np
 import pytest
@@ -50,6 +51,13 @@ def creased_prism(turn_deg: float) -> trimesh.Trimesh:
     end = (A / 2 - (B / 2) * math.tan(t), B / 2)
     outline = [(-A / 2, -B / 2), (A / 2, -B / 2), (A / 2, 0.0), end, (-A / 2, B / 2)]
     return trimesh.creation.extrude_polygon(Polygon(outline), C)
+
+
+@pytest.fixture(autouse=True)
+def compliant() -> Iterator[None]:
+    """The compliant slide on (``world.comply_deg``, 0 by default: straight slides)."""
+    with settings.override(world={"comply_deg": 12.0}):
+        yield
 
 
 def _slide(mesh: trimesh.Trimesh, y0: float = -0.02) -> Motion:

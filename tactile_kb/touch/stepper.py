@@ -17,7 +17,8 @@ and reports the first change:
 A slide follows the horizontal tangent of the surface under the followed sensor; for a plane
 surface the tip stays at constant distance from it, so the same interval algebra gives where
 the face ends (a ``"release"`` at a convex edge) or where another face closes a sensor (a
-``"touch"`` at a concave corner). The slide is compliant (:meth:`StepperWorld._comply`): small
+``"touch"`` at a concave corner). With ``world.comply_deg`` > 0 (0 by default) the slide is
+compliant (:meth:`StepperWorld._comply`): small
 irregularities of a scanned surface (a bump, a dip, a crease between its triangles, turning
 the surface at most ``world.comply_deg`` from where the slide began) are ridden over; a real
 edge ends it where the straight slide ends.
