@@ -93,6 +93,32 @@ class WorldSettings(_Group):
         description="Degrees: a contact on a triangle's side this close in direction to a contact "
         "inside a face is the same contact (the analytic world).",
     )
+    comply_deg: float = Field(
+        0.0,
+        ge=0,
+        lt=90,
+        description="Degrees: a slide in the analytic world rides over an irregularity (a bump, a "
+        "dip, a crease between a scan's triangles) whose surface turns at most this far from the "
+        "contact where the slide began, as a finger under force control does; a real edge turns "
+        "further and ends the slide as a straight slide would (0, the default: straight slides "
+        "only; 12 rides over a careful scan's roughness, but also over a 48-sided cylinder's "
+        "7.5° facets).",
+    )
+    comply_step: float = Field(
+        0.8,
+        gt=0,
+        le=1,
+        description="Tip radii: how far ahead a compliant slide that lost the surface looks for it "
+        "again (past a real convex edge the surface found there has turned by at least "
+        "asin(comply_step), 53°, or by the edge's whole angle: more than comply_deg).",
+    )
+    comply_depth: float = Field(
+        0.25,
+        gt=0,
+        le=1,
+        description="Tip radii: the deepest dip a compliant slide rides over (it lifts this far off "
+        "the surface, steps on by comply_step and presses back up to twice as far).",
+    )
 
 
 class FingerSettings(_Group):

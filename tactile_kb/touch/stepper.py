@@ -17,7 +17,11 @@ and reports the first change:
 A slide follows the horizontal tangent of the surface under the followed sensor; for a plane
 surface the tip stays at constant distance from it, so the same interval algebra gives where
 the face ends (a ``"release"`` at a convex edge) or where another face closes a sensor (a
-``"touch"`` at a concave corner).
+``"touch"`` at a concave corner). With ``world.comply_deg`` > 0 (0 by default) the slide is
+compliant (:meth:`StepperWorld._comply`): small
+irregularities of a scanned surface (a bump, a dip, a crease between its triangles, turning
+the surface at most ``world.comply_deg`` from where the slide began) are ridden over; a real
+edge ends it where the straight slide ends.
 
 The world is ideal: it reports true positions and the sensors that really close. Encoder
 noise, drop-outs and false fires are added by :class:`tactile_kb.touch.sensors.FaultySensors`,
@@ -74,6 +78,9 @@ _EPS_T = 1e-12
 _BATCH = 48  # sensor states evaluated together along a motion
 _DENSE_STRIDE = 8  # on a dense mesh, sensor states are first sampled every 8th gap
 _CONTACT_CACHE = 64  # single-point contact sets kept (see StepperWorld._contacts)
+_MAX_PIECES = 200  # straight pieces of one compliant slide (see StepperWorld._comply)
+_SIDE = 0.5  # a surface whose normal's horizontal part is below this (more than 60° from
+# vertical) is a top: a compliant slide on it lifts and presses along its normal, not across
 
 DENSE_FACES = 4000
 """Meshes with more triangles than this are searched through k-d trees: a motion meets only the
@@ -681,7 +688,204 @@ class StepperWorld:
             t /= norm
             if float(t @ cmd) < 0:
                 t = -t
-        return self._run("slide", _v3(a), _v3(t), length)
+        m = self._run("slide", _v3(a), _v3(t), length)
+        if current().world.comply_deg <= 0.0:
+            return m
+        return self._comply(m, n, sensor, float(length))
+
+    def _comply(self, first: Motion, n0: FloatArray, sensor: int, length: float) -> Motion:
+        """The compliant slide that began with the straight slide ``first`` along the surface of
+        outward normal ``n0`` under ``sensor``.
+
+        A finger under force control rides over irregularities smaller than its tip: its centre
+        follows the surface offset by ρ while the followed sensor stays pressed. Where a
+        straight piece stops without a sensor change (``"blocked"`` by a bump or a crease of
+        a scan's triangles) the tip turns to the tangent of the contact that blocks it; where
+        it loses the surface (the followed sensor opens: a dip, or a crease turning away) it
+        lifts off by ``comply_depth`` ρ, steps on by ``comply_step`` ρ and presses back (a
+        ride, :meth:`_ride_on`). Either is taken only when the surface met there turns at most
+        :attr:`~tactile_kb.settings.WorldSettings.comply_deg` from ``n0`` and, after a ride,
+        the followed sensor fires again. On a side (a normal within 60° of horizontal) the
+        tip stays at constant z; on a top it lifts and presses along the normal and a bump
+        turns the slide up its slope. Otherwise the slide ends as the straight piece
+        ended: at a real edge, a real corner or a wall the surface turns further (past a
+        convex edge the surface a ride finds has turned by at least asin(comply_step)), so a
+        polyhedron's slides end exactly where straight slides end.
+
+        The motion's ``distance`` is the length of the path, its ``direction`` the last
+        piece's; a ride that finds the sensors changed (a neighbouring sensor closed or
+        opened while the followed one stays ON) ends the motion there with that event.
+        """
+        cos_max = math.cos(math.radians(current().world.comply_deg))
+        fired0 = first.fired_start
+        start = np.asarray(first.start, dtype=float)
+        m = first
+        travelled = first.distance
+        stalls = 0
+        for _ in range(_MAX_PIECES):
+            if travelled >= length - 1e-12 or m.event not in ("blocked", "release"):
+                break
+            if m.event == "release" and sensor in m.fired:
+                break  # another surface's sensor opened: the servo decides
+            here = np.asarray(m.end, dtype=float)
+            u = np.asarray(m.direction, dtype=float)
+            if m.event == "blocked":
+                turned = self._conform(here, u, n0, cos_max)
+                if turned is None:
+                    break
+                # off the surface by a few block_tol (far inside the contact band): the piece
+                # starts clear of the triangles it is tangent to, not on their boundary
+                t, nb = turned
+                pos, hop = here + 4.0 * current().world.block_tol * nb, 0.0
+            else:
+                ridden = self._ride_on(here, u, n0, sensor, cos_max)
+                if ridden is None:
+                    break
+                pos, t, hop, fired = ridden
+                if fired != fired0 or travelled + hop >= length - 1e-12:
+                    # the sensors changed where the surface was regained, or the ride went
+                    # the whole length
+                    return self._joined(start, pos, u, travelled + hop, fired0, fired)
+            nxt = self._run("slide", _v3(pos), _v3(t), length - travelled - hop)
+            stalls = stalls + 1 if hop + nxt.distance < 1e-9 else 0
+            if stalls >= 4:  # turning on the spot: the surface does not let the tip on
+                break
+            m = nxt
+            travelled += hop + nxt.distance
+        if m is first:
+            return first
+        return Motion(
+            kind="slide",
+            start=first.start,
+            end=m.end,
+            direction=m.direction,
+            distance=float(travelled),
+            event=m.event,
+            fired_start=fired0,
+            fired=m.fired,
+            closed=tuple(sorted(set(m.fired) - set(fired0))),
+            opened=tuple(sorted(set(fired0) - set(m.fired))),
+            measured=m.end,
+        )
+
+    def _joined(
+        self,
+        start: FloatArray,
+        end: FloatArray,
+        direction: FloatArray,
+        distance: float,
+        fired0: tuple[int, ...],
+        fired: tuple[int, ...],
+    ) -> Motion:
+        """A compliant slide that ended after a ride, where its sensors changed (``fired0`` →
+        ``fired``) or its length was travelled."""
+        closed = tuple(sorted(set(fired) - set(fired0)))
+        opened = tuple(sorted(set(fired0) - set(fired)))
+        return Motion(
+            kind="slide",
+            start=_v3(start),
+            end=_v3(end),
+            direction=_v3(direction),
+            distance=float(distance),
+            event="touch" if closed else "release" if opened else "none",
+            fired_start=fired0,
+            fired=fired,
+            closed=closed,
+            opened=opened,
+            measured=_v3(end),
+        )
+
+    @staticmethod
+    def _tangent_of(n: FloatArray, u: FloatArray, side: bool) -> FloatArray | None:
+        """The tangent of a surface of outward normal ``n`` a slide along ``u`` turns to: the
+        horizontal ẑ × n on a side, in ``u``'s sense; on a top, ``u`` projected on the surface."""
+        t = np.array([-n[1], n[0], 0.0]) if side else u - float(u @ n) * n
+        norm = float(np.linalg.norm(t))
+        if norm < 1e-6:
+            return None
+        t /= norm
+        return t if float(t @ u) >= 0.0 else -t
+
+    def _conform(
+        self, here: FloatArray, u: FloatArray, n0: FloatArray, cos_max: float
+    ) -> tuple[FloatArray, FloatArray] | None:
+        """The direction a slide blocked at ``here`` while moving along ``u`` turns to: of the
+        tangents of the contacts there, the one nearest ``u`` that enters none of them (the
+        motion re-projected on the surfaces that block it), when the surface it follows turns
+        at most ``comply_deg`` from ``n0``; with that surface's normal. Else None."""
+        normals = self._normals_at(here)
+        if len(normals) == 0 or float((normals @ u).min()) >= 0.0:
+            return None  # nothing at the tip blocks it (the shaft does): no turn helps
+        side = float(np.hypot(n0[0], n0[1])) >= _SIDE
+        best: tuple[FloatArray, FloatArray] | None = None
+        best_cos = -math.inf
+        for n in normals:
+            t = self._tangent_of(n, u, side)
+            if t is None or float(n @ n0) < cos_max:
+                continue
+            if float((normals @ t).min()) < -1e-9:
+                continue  # it would enter another of the surfaces at the tip
+            c = float(t @ u)
+            if c > best_cos:
+                best, best_cos = (t, n), c
+        return best
+
+    def _normals_at(self, p: FloatArray) -> FloatArray:
+        """Unit outward normals (k, 3) of the surface at every triangle within ρ +
+        CONTACT_TOL of ``p`` (towards ``p`` from the triangle's closest point; the contacts
+        :meth:`_touching` merges are kept apart, since any of them may block a motion)."""
+        r = self._rho + current().world.contact_tol
+        pt = np.asarray(p, dtype=float).reshape(1, 3)
+        ti = np.asarray(self._tree.query_ball_point(pt[0], r + self._tr_max + 1e-9), dtype=np.intp)
+        if len(ti) == 0:
+            return np.zeros((0, 3))
+        self._fill(ti)
+        q, _ = _closest_packed(self._pk[ti], np.repeat(pt, len(ti), axis=0))
+        d = pt - q
+        dist = _norms(d)
+        ok = (dist <= r) & (dist > 1e-12)
+        out: FloatArray = d[ok] / dist[ok, None]
+        return out
+
+    def _ride_on(
+        self, here: FloatArray, u: FloatArray, n0: FloatArray, sensor: int, cos_max: float
+    ) -> tuple[FloatArray, FloatArray, float, tuple[int, ...]] | None:
+        """Ride over a dip where a slide along ``u`` lost the surface at ``here``: lift off
+        (horizontally from a side, along ``n0`` from a top) by ``comply_depth`` ρ, step on by ``comply_step`` ρ, press back up to
+        twice as far. Returns (where the surface was regained, the tangent there, the step's
+        length, the sensors ON there), or None when the followed ``sensor`` does not fire
+        there or the surface there turns more than ``comply_deg`` from ``n0``."""
+        world = current().world
+        side = float(np.hypot(n0[0], n0[1])) >= _SIDE
+        out = np.array([n0[0], n0[1], 0.0]) if side else n0.copy()
+        out /= float(np.linalg.norm(out))
+        depth = world.comply_depth * self._rho
+        step = world.comply_step * self._rho
+        pos = here
+        for direction, reach in ((out, depth), (u, step)):
+            done = 0.0
+            while done < reach - 1e-12:  # through losses of contact; anything else: no ride
+                leg = self._run("move", _v3(pos), _v3(direction), reach - done)
+                pos = np.asarray(leg.end, dtype=float)
+                done += leg.distance
+                if leg.event == "none":
+                    break
+                if leg.event != "release" or leg.distance <= 0.0:
+                    return None
+        press = self._run("move", _v3(pos), _v3(-out), 2.0 * depth)
+        if press.event != "touch" or sensor not in press.fired:
+            return None
+        end = np.asarray(press.end, dtype=float)
+        contacts = self._contacts(end)
+        if len(contacts) == 0:
+            return None
+        nq = -contacts[int(np.argmax(contacts @ self._dirs[sensor]))]
+        if float(nq @ n0) < cos_max:
+            return None
+        t = self._tangent_of(nq, u, side)
+        if t is None:
+            return None
+        return end, t, float((end - here) @ u), press.fired
 
     def _changes(
         self, a: FloatArray, u: FloatArray, marks: FloatArray, fired0: tuple[int, ...]

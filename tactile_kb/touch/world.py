@@ -244,6 +244,12 @@ class World(Protocol):
         surface is met (a concave corner), ``"blocked"`` when another surface stops it
         without a change, ``"limit"`` or ``"none"``. Not in contact at ``start`` → a
         ``"release"`` of ``sensor`` at distance 0.
+
+        A world may be compliant, as a finger under force control is: the analytic world rides
+        over irregularities smaller than the tip (:meth:`StepperWorld._comply
+        <tactile_kb.touch.stepper.StepperWorld._comply>`, the setting ``world.comply_deg``);
+        its ``distance`` is then the length of the path and its ``direction`` the last one
+        travelled.
         """
         ...
 
