@@ -42,7 +42,7 @@ import copy
 import dataclasses
 import math
 from collections import Counter
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 
 import numpy as np
@@ -215,11 +215,7 @@ def completion_probes(model: ObjectModel, *, height_gap: float | None = None) ->
     poly = model.polyhedron
     probes += _bottom_probes(model, centres, rho, gap)
     top_touched = max(float(c.point[2]) for c in record.contacts)
-    for k, verts in enumerate(poly.faces):
-        found = _modelled_face(model, k)
-        if found is None:
-            continue
-        face, n = found
+    for verts, face, n in _modelled_faces(model):
         if face.source == "contacts" and n[2] >= current().explore.top_nz:
             probes += _top_probes(face, poly.vertices[list(verts)], centres, rho)
             continue
@@ -306,11 +302,7 @@ def second_spot_probes(model: ObjectModel) -> list[Probe]:
     centres = np.asarray([c.centre for c in record.contacts], dtype=float).reshape(-1, 3)
     top_nz = current().explore.top_nz
     out = []
-    for k, verts in enumerate(poly.faces):
-        found = _modelled_face(model, k)
-        if found is None:
-            continue
-        face, n = found
+    for verts, face, n in _modelled_faces(model):
         if face.source != "contacts" or not face.contacts or n[2] >= top_nz:
             continue
         pts = centres[list(face.contacts)]
@@ -707,6 +699,17 @@ def _table_corner_probe(v: FloatArray, n: FloatArray, hull: ConvexHull, rho: flo
     )
 
 
+def _modelled_faces(model: ObjectModel) -> Iterator[tuple[list[int], Face, FloatArray]]:
+    """Each polyhedron face the model maps to a face: its vertices, the model's face and that
+    face's unit normal."""
+    poly = model.polyhedron
+    assert poly is not None
+    for k, verts in enumerate(poly.faces):
+        found = _modelled_face(model, k)
+        if found is not None:
+            yield list(verts), *found
+
+
 def _modelled_face(model: ObjectModel, k: int) -> tuple[Face, FloatArray] | None:
     """The model face behind polyhedron face ``k`` and its unit normal, or None when the model
     maps no face to it."""
@@ -728,11 +731,7 @@ def _low_side_probes(model: ObjectModel, centres: FloatArray, rho: float) -> lis
     poly = model.polyhedron
     assert poly is not None
     out = []
-    for k, verts in enumerate(poly.faces):
-        found = _modelled_face(model, k)
-        if found is None:
-            continue
-        face, n = found
+    for verts, face, n in _modelled_faces(model):
         if face.source != "contacts" or abs(n[2]) > 0.3 or not face.contacts:
             continue
         ring = poly.vertices[list(verts)]
