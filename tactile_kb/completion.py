@@ -286,12 +286,12 @@ def second_spot_probes(model: ObjectModel) -> list[Probe]:
     sampled from its middle outwards to its corners and its edges' middles, clear of its
     edges by ρ/4, with the tip 1.5 ρ above the table; a sliver with no such point: its
     middle): the middle is the least likely to lie off the face when the model's outline of
-    it is wrong (a neighbour's touch there only adds a neighbour's touch). It is approached along the face's normal (the head indexed when the face
-    overhangs): its touch confirms the plane, or, landing elsewhere, corrects it. Faces with
-    no such point at least ρ from the touches, the table and tops (touched from above along
-    lines: :func:`_top_probes`) get none. Like the corner checks, these test the model and
-    never hold the completion open; at most ``explore.spot_probes`` per
-    exploration (:class:`ModelCompleter`).
+    it is wrong (a neighbour's touch there only adds a neighbour's touch). It is approached
+    along the face's normal (the head indexed when the face overhangs): its touch confirms
+    the plane, or, landing elsewhere, corrects it. Faces with no such point at least ρ from
+    the touches, the table and tops (touched from above along lines: :func:`_top_probes`) get
+    none. Like the corner checks, these test the model and never hold the completion open;
+    at most ``explore.spot_probes`` per exploration (:class:`ModelCompleter`).
     """
     poly = model.polyhedron
     record = model.record

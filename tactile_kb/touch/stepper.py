@@ -18,10 +18,9 @@ A slide follows the horizontal tangent of the surface under the followed sensor;
 surface the tip stays at constant distance from it, so the same interval algebra gives where
 the face ends (a ``"release"`` at a convex edge) or where another face closes a sensor (a
 ``"touch"`` at a concave corner). With ``world.comply_deg`` > 0 (0 by default) the slide is
-compliant (:meth:`StepperWorld._comply`): small
-irregularities of a scanned surface (a bump, a dip, a crease between its triangles, turning
-the surface at most ``world.comply_deg`` from where the slide began) are ridden over; a real
-edge ends it where the straight slide ends.
+compliant (:meth:`StepperWorld._comply`): small irregularities of a scanned surface (a bump,
+a dip, a crease between its triangles, turning the surface at most ``world.comply_deg`` from
+where the slide began) are ridden over; a real edge ends it where the straight slide ends.
 
 The world is ideal: it reports true positions and the sensors that really close. Encoder
 noise, drop-outs and false fires are added by :class:`tactile_kb.touch.sensors.FaultySensors`,
