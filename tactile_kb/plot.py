@@ -115,6 +115,9 @@ def save_figure(fig: Figure, path: str | Path, *, dpi: float | None = None) -> P
 # ---------------------------------------------------------------------------------------------
 
 
+_Box = tuple[np.ndarray[Any, np.dtype[np.float64]], np.ndarray[Any, np.dtype[np.float64]]]
+"""An axis-aligned box: its lower and upper corners."""
+
 VIEW_MARGIN = 0.35
 """The 3-D view frames the object (its mesh, else its contacts and model) and this share of its
 size around it; the finger's path is clipped there, so a long approach from the workspace's
@@ -123,7 +126,7 @@ edge does not shrink the object to a speck."""
 
 def _view_box(
     points: np.ndarray[Any, np.dtype[np.float64]],
-) -> tuple[np.ndarray[Any, np.dtype[np.float64]], np.ndarray[Any, np.dtype[np.float64]]]:
+) -> _Box:
     """A cube (lower and upper corners) around ``points`` with :data:`VIEW_MARGIN` of its size
     to spare, its floor at most 2 mm below the lowest point (the table). A cube keeps the three
     axes at equal scales and their labels where matplotlib places them well."""
@@ -137,7 +140,7 @@ def _view_box(
 
 def _set_view(
     ax: Any,
-    box: tuple[np.ndarray[Any, np.dtype[np.float64]], np.ndarray[Any, np.dtype[np.float64]]],
+    box: _Box,
 ) -> None:
     low, high = box
     ax.set_xlim(low[0], high[0])
@@ -148,7 +151,7 @@ def _set_view(
 
 def _clip_polyline(
     path: np.ndarray[Any, np.dtype[np.float64]],
-    box: tuple[np.ndarray[Any, np.dtype[np.float64]], np.ndarray[Any, np.dtype[np.float64]]],
+    box: _Box,
 ) -> list[np.ndarray[Any, np.dtype[np.float64]]]:
     """The parts of the polyline ``path`` (N, 3) inside the axis-aligned ``box``, as (2, 3)
     segments (Liang-Barsky clipping of every step)."""

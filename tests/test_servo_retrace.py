@@ -70,7 +70,8 @@ def test_the_way_out_is_the_way_in() -> None:
 
 def test_without_a_way_in_the_probe_is_given_up_and_said() -> None:
     c = under_the_brim()
-    c._trail = c._trail[-1:]  # as if the finger had been put there: no way back is known
+    while len(c._trail) > 1:  # as if the finger had been put there: no way back is known
+        c._trail.popleft()
     assert not c._go_round(np.array([0.09, 0.0, 0.080]), "a test")
     assert any("the way to a probe (a test) is blocked" in n for n in c.notes)
 
@@ -80,6 +81,7 @@ def test_no_free_way_up_from_any_point_moves_nothing() -> None:
     motions = c.motions
     assert c._retrace_up(0.080) is not None  # the way in is known: out and up
     c = under_the_brim()
-    c._trail = c._trail[-2:]  # the last leg only: from beside the stem up, still under the brim
+    while len(c._trail) > 2:  # the last leg only: from beside the stem up, under the brim
+        c._trail.popleft()
     assert c._retrace_up(0.080) is None
     assert c.motions == motions

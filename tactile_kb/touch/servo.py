@@ -58,7 +58,8 @@ from __future__ import annotations
 
 import itertools
 import math
-from collections.abc import Iterator, Sequence
+from collections import deque
+from collections.abc import Callable, Iterator, Sequence
 from dataclasses import asdict, dataclass, field, replace
 from typing import Literal, Protocol, overload
 
@@ -101,6 +102,23 @@ it (the 33-sensor finger's neighbours lie 30° apart) when within this angle."""
 PERSIST_TRIES = DEFAULTS.servo.persist_tries
 """How often a blocked slide's re-acquisition (:meth:`Controller._persist`) backs off and steps
 on, each time twice as far (0.8, 1.6, 3.2 tip radii), before the contour ends."""
+
+
+def _through_releases(
+    move: Callable[[FloatArray, FloatArray, float], Motion],
+    pos: FloatArray,
+    direction: FloatArray,
+    length: float,
+) -> tuple[Motion, float]:
+    """``move`` ``length`` along ``direction`` from ``pos``, on through losses of contact; the
+    last motion and the distance gone."""
+    done = 0.0
+    while True:
+        m = move(pos, direction, length - done)
+        done += m.distance
+        pos = np.asarray(m.end, dtype=float)
+        if m.event != "release" or done >= length - 1e-9 or m.distance <= 0.0:
+            return m, done
 
 
 RETRACE_POINTS = 64
@@ -354,7 +372,8 @@ class Controller:
         self._layer: int | None = None
         self._last_pos: Vec3 | None = None
         self._last_move: Motion | None = None
-        self._trail: list[Vec3] = []  # where the tip centre truly went (the robot's own way)
+        # where the tip centre truly went (the robot's own way), as far back as a retrace runs
+        self._trail: deque[Vec3] = deque(maxlen=RETRACE_POINTS)
         self._surfaces: list[tuple[float, _Segment]] = []  # (layer z, surface slid along)
         self._heights: list[float] = []  # the z of every layer
 
@@ -803,15 +822,10 @@ class Controller:
         """Whether the world lets the tip move ``length`` along ``direction`` from ``start``
         without meeting anything (losses of contact aside). Asked, not moved: nothing is
         recorded."""
-        done = 0.0
-        pos = start
-        while done < length - 1e-9:
-            m = self.world.move(_v3(pos), _v3(direction), length - done)
-            if m.event not in ("none", "release") or m.distance <= 0.0:
-                return m.event in ("none", "release") and done + m.distance >= length - 1e-9
-            done += m.distance
-            pos = np.asarray(m.end, dtype=float)
-        return True
+        m, done = _through_releases(
+            lambda p, u, n: self.world.move(_v3(p), _v3(u), n), start, direction, length
+        )
+        return m.event in ("none", "release") and done >= length - 1e-9
 
     def _retrace_up(self, safe: float) -> Motion | None:
         """Back along the finger's own way until the way straight up to ``safe`` is free, then
@@ -823,7 +837,7 @@ class Controller:
         the way the finger came in is the one known way out: a robot can always run its own
         motions backwards. The points are the true positions of the tip (the record's path
         holds the measured ones)."""
-        trail = [np.asarray(p, dtype=float) for p in self._trail[-RETRACE_POINTS:]]
+        trail = [np.asarray(p, dtype=float) for p in self._trail]
         if len(trail) < 2:
             return None
         cur = trail[-1]
@@ -1372,13 +1386,7 @@ class Controller:
 
     def _move_on(self, pos: FloatArray, direction: FloatArray, length: float) -> Motion:
         """Move ``length`` along ``direction`` through losses of contact; stop at anything else."""
-        done = 0.0
-        while True:
-            m = self._move(pos, direction, length - done)
-            done += m.distance
-            pos = np.asarray(m.end, dtype=float)
-            if m.event != "release" or done >= length - 1e-9 or m.distance <= 0.0:
-                return m
+        return _through_releases(self._move, pos, direction, length)[0]
 
     def _z_increment(
         self, pos: FloatArray, f: _Follow, centre: FloatArray | None = None
