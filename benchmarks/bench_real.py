@@ -2,7 +2,7 @@
 classified.
 
 Run: ``.venv/bin/python benchmarks/bench_real.py [--instances N] [--seeds N] [--levels 1,2,3]
-[--workers N] [--explorer NAME ...] [--family NAME ...] [--no-real] [--log FILE]`` (or
+[--workers N] [--explorer NAME ...] [--family NAME ...] [--no-real] [--draw N] [--log FILE]`` (or
 ``python benchmarks/run.py real``). It never fails; it prints, per group (real objects; ideal
 solids; perturbed solids per level) and explorer:
 
@@ -148,6 +148,7 @@ def jobs(
     explorers: list[str],
     families: set[str] | None = None,
     real: bool = True,
+    draw: int = 0,
 ) -> list[Job]:
     out: list[Job] = []
     with (REAL / "manifest.csv").open(newline="") as f:
@@ -172,7 +173,8 @@ def jobs(
         for k, fam in enumerate(FAMILIES):
             if families is not None and fam.name not in families:
                 continue
-            rng = np.random.default_rng(2000 + k)
+            # draw 0 is the set every earlier figure was measured on; another is held out
+            rng = np.random.default_rng(2000 + k if not draw else [draw, 2000 + k])
             for _ in range(instances):
                 ideal, poly_label, desc = fam.build(rng)
                 for rules in ("polyhedra", "parallelepipeds"):
@@ -280,6 +282,13 @@ def main(argv: list[str] | None = None) -> None:
     ap.add_argument("--log", type=Path, help="write each outcome to this CSV file as it comes")
     ap.add_argument("--summarize", type=Path, help="print the figures of a --log file and stop")
     ap.add_argument(
+        "--draw",
+        type=int,
+        default=0,
+        help="which random objects to perturb (0: the set of the earlier figures; any other "
+        "number: another set, to check that a change is not tuned to one)",
+    )
+    ap.add_argument(
         "--reverse",
         action="store_true",
         help="run the shuffled jobs from the last one back (a second process that meets a "
@@ -293,7 +302,13 @@ def main(argv: list[str] | None = None) -> None:
     explorers = args.explorer or [e for e in ("stepper", "mujoco") if e in known]
     levels = [int(v) for v in args.levels.split(",") if v]
     todo = jobs(
-        args.instances, args.seeds, levels, explorers, set(args.family) or None, not args.no_real
+        args.instances,
+        args.seeds,
+        levels,
+        explorers,
+        set(args.family) or None,
+        not args.no_real,
+        args.draw,
     )
     # In a shuffled order, an interrupted run's log is a fair sample of the whole.
     order = np.random.default_rng(0).permutation(len(todo))
