@@ -372,6 +372,7 @@ class Controller:
         self._layer: int | None = None
         self._last_pos: Vec3 | None = None
         self._last_move: Motion | None = None
+        self._approach = -_Z  # the direction of the last probe's approach
         # where the tip centre truly went (the robot's own way), as far back as a retrace runs
         self._trail: deque[Vec3] = deque(maxlen=RETRACE_POINTS)
         self._surfaces: list[tuple[float, _Segment]] = []  # (layer z, surface slid along)
@@ -661,7 +662,7 @@ class Controller:
         done = self._probe(p)
         if not self.orientation.vertical and self._last_pos is not None and len(self.path) > start:
             here = np.asarray(self._last_pos, dtype=float)
-            self._move_on(here, _unit(np.asarray(p.normal, dtype=float)), self.reach)
+            self._move_on(here, -self._approach, self.reach)
         return done
 
     def _probe(self, p: Probe) -> bool:
@@ -670,8 +671,17 @@ class Controller:
         The way there goes up over the hint box, across to above the start of the approach,
         and down to it (each leg in free space: anything met on the way ends the probe). The
         touch is followed by a short slide each way along the surface (more tip centres on it).
+
+        The approach starts outside the hint box along ``p.normal`` and runs back along it
+        through ``p.target``. A normal that points down (an undercut face) leaves the box
+        sideways, never through its floor (the table: the start would lie under the object,
+        where the way down from above cannot go), and a start that would lie below the
+        workspace's floor is lifted onto it: the approach then runs from there straight at
+        the target (a parallel line lifted with it would meet the face higher up, or its
+        upper edge, instead of where the model asked).
         """
         normal = _unit(np.asarray(p.normal, dtype=float))
+        self._approach = -normal
         pose: Orientation | None
         if isinstance(self.world, OrientableWorld) and p.facing is not None:
             pose = self.finger.index_towards(p.facing)
@@ -692,17 +702,22 @@ class Controller:
         lo, hi = np.asarray(hint.lo, dtype=float), np.asarray(hint.hi, dtype=float)
         clear = self.rho + self.params.approach_margin
         # along the normal out of the hint box: the approach starts outside the object
+        # (sideways, never through the floor of the box: the table)
         out = min(
             (float(hi[k]) - float(target[k])) / normal[k]
             if normal[k] > 1e-9
             else (float(lo[k]) - float(target[k])) / normal[k]
-            if normal[k] < -1e-9
+            if normal[k] < -1e-9 and k < 2
             else math.inf
             for k in range(3)
         )
         out = max(out, 0.0) if math.isfinite(out) else 0.0
         far = target + normal * (out + clear)
-        far[2] = max(float(far[2]), float(self.world.workspace.lo[2]))
+        floor = float(self.world.workspace.lo[2])
+        if float(far[2]) < floor:  # lifted onto the floor: aimed at the target from there
+            far[2] = floor
+            if float(np.linalg.norm(target - far)) > 1e-9:
+                self._approach = _unit(target - far)
         if not self.world.workspace.contains(_v3(far)):
             self._note(
                 f"a probe ({p.reason}) would start outside the workspace at {_fmt(_v3(far))}"
@@ -711,7 +726,7 @@ class Controller:
         if not self._go_round(far, p.reason, pose):
             return False
         here = np.asarray(self._last_pos, dtype=float)
-        m = self._move(here, -normal, float(np.linalg.norm(far - target)) + p.reach)
+        m = self._move(here, self._approach, float(np.linalg.norm(far - target)) + p.reach)
         if m.event != "touch":
             self._note(f"a probe ({p.reason}) found nothing ({m.event})")
             return False
