@@ -749,6 +749,21 @@ def _is_quantised(directions: FloatArray, sensors: FloatArray) -> bool:
     return bool(found.all())
 
 
+def _head_frame(directions: FloatArray, orientations: Sequence[Sequence[float]]) -> FloatArray:
+    """The world ``directions`` in the frame of the finger that reported each (its head at
+    ``orientations``, tilt and turn in degrees, as :attr:`tactile_kb.record.Contact.orientation`
+    holds them): a tilted probe's sensors are the layout's sensors turned with the head, and
+    their quantisation is read in the layout's frame."""
+    o = np.radians(np.asarray(orientations, dtype=float).reshape(-1, 2))
+    if len(o) == 0 or not o.any():
+        return directions
+    ct, st, ca, sa = np.cos(o[:, 0]), np.sin(o[:, 0]), np.cos(o[:, 1]), np.sin(o[:, 1])
+    x, y, z = directions[:, 0], directions[:, 1], directions[:, 2]
+    # undo the turn about +z, then the tilt about the horizontal axis
+    xt, yt = ca * x + sa * y, -sa * x + ca * y
+    return np.column_stack([ct * xt - st * z, yt, st * xt + ct * z])
+
+
 def contact_arrays(contacts: Sequence[Contact]) -> tuple[FloatArray, FloatArray, FloatArray]:
     """The contacts' tip centres, sensor directions r0 and points r1 as three (m, 3) arrays.
 
@@ -870,7 +885,9 @@ def merge_plane_arrays(
     tol = split_tol if split_tol is not None else max(current().geometry.split_tol, 6.0 * noise)
     faces: list[Face] = []
     if len(chosen):
-        quantised = _is_quantised(arrays[1], sensors)
+        quantised = _is_quantised(arrays[1], sensors) or _is_quantised(
+            _head_frame(arrays[1], [record.contacts[i].orientation for i in chosen]), sensors
+        )
         faces = _faces_from_contacts(
             record.tip_radius,
             arrays,
@@ -1185,7 +1202,8 @@ def edge_faces(
     other faces bound, while a face of the object lies where the others' polyhedron would
     overshoot it. A face is an edge face when the largest *penetration* of its tip centres into
     the others' polyhedron grown by ρ is at most ``rounding`` × the width of the widest face it
-    lies against (the largest rounding of such an edge penetrates by about its radius) plus
+    lies against (the largest rounding of such an edge penetrates by about its radius; a
+    centre lies against the grown planes within ρ/2 of its depth inside the nearest one) plus
     :data:`EDGE_SIGMAS` × ``noise``/√m, and that face is at least
     :data:`EDGE_MIN_WIDTH` tip radii wide. Only faces whose centres span no plane of their own
     (one contact, or contacts along a line) and no more touched than the faces they lie
@@ -1273,7 +1291,11 @@ def edge_faces(
                 -outside.max(axis=1),
                 -np.linalg.norm(c - q, axis=1),
             )
-            near = np.abs(q @ poly.normals.T - grown) <= 0.5 * rho + 1e-9
+            # the planes it lies against: within half a tip radius of the nearest (a centre
+            # inside the grown polyhedron, on a rounding, lies as deep inside its nearest
+            # plane as it penetrates)
+            depth = np.maximum(penetration, 0.0)[:, None]
+            near = np.abs(q @ poly.normals.T - grown) <= depth + 0.5 * rho + 1e-9
             against = [others[int(poly.plane_index[fi])] for fi in np.flatnonzero(near.any(0))]
             # the widest of them: next to it may lie another edge face, not yet removed
             width = max((widths.get(j, 0.0) for j in against), default=0.0)
