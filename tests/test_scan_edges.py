@@ -1,5 +1,6 @@
 """Faces of scan-like surfaces, round 7 (issue 10): one-spot touches of edges rounded more
-widely than the tip and the quantisation of sensors read with the head indexed.
+widely than the tip, the quantisation of sensors read with the head indexed, and a probe of a
+corner that juts out beyond the workspace.
 
 Ground truth is the geometry built here: the planes of a cube, tip centres placed where a tip
 touching an edge rounded with a radius r puts them (at ρ + r from the rounding's axis), and
@@ -12,9 +13,12 @@ import math
 
 import numpy as np
 
+from tactile_kb import solids
 from tactile_kb.geometry.planes import Face, edge_faces, merge_planes
 from tactile_kb.record import Contact, ExplorationRecord
 from tactile_kb.touch.finger import Orientation, builtin_finger
+from tactile_kb.touch.servo import Ending, Probe
+from tactile_kb.touch.stepper import StepperExplorer
 
 FINGER = builtin_finger("33")
 RHO = FINGER.radius
@@ -110,3 +114,35 @@ def test_a_tilted_head_keeps_its_sensors_quantised() -> None:
     assert not vertical[0].refined
     assert vertical[0].normal_uncertainty_deg > 10.0
     assert tilted[0].normal_uncertainty_deg == vertical[0].normal_uncertainty_deg
+
+
+class _OneProbe:
+    """A completer that asks for ``probe`` once, then ends."""
+
+    def __init__(self, probe: Probe) -> None:
+        self.probe = probe
+        self.asked = False
+
+    def next_probe(
+        self, record: ExplorationRecord, last: tuple[Probe, bool] | None
+    ) -> Probe | Ending:
+        if self.asked:
+            return Ending("closed", "done")
+        self.asked = True
+        return self.probe
+
+
+def test_a_probe_aimed_far_outside_the_object_starts_where_its_line_leaves_the_hint() -> None:
+    # A model that lacks a face puts a corner where its neighbours' planes meet, possibly
+    # further out than the workspace reaches (bounds + 15 cm). The object lies inside the
+    # hint box: the probe of that corner approaches from where its line leaves the box, and
+    # touches the face the model lacks.
+    box = solids.box(0.08, 0.06, 0.05)  # x in ±4 cm
+    far = Probe((0.40, 0.0, 0.025), (1.0, 0.0, 0.0), 0.40, "a corner juts out (test)")
+    explorer = StepperExplorer(completer=lambda: _OneProbe(far))
+    record = explorer.explore(box, seed=0)
+    probed = [c for c in record.contacts if c.phase == "complete" and c.kind == "touch"]
+    assert not [n for n in record.notes if "outside the workspace" in n]
+    assert len(probed) == 1
+    assert abs(probed[0].centre[0] - (0.04 + RHO)) < 1e-6
+    assert np.allclose(probed[0].direction, (-1.0, 0.0, 0.0))
