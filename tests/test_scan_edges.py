@@ -1,20 +1,16 @@
-"""Faces of scan-like surfaces, round 7 (issue 10): one-spot touches of edges rounded more
-widely than the tip, the quantisation of sensors read with the head indexed, and a probe of a
-corner that juts out beyond the workspace.
+"""Scan-like solids, round 7 (issue 10): the quantisation of sensors read with the head
+indexed, and a probe of a corner that juts out beyond the workspace.
 
-Ground truth is the geometry built here: the planes of a cube, tip centres placed where a tip
-touching an edge rounded with a radius r puts them (at ρ + r from the rounding's axis), and
-sensor directions turned with the head.
+Ground truth is the geometry built here: sensor directions turned with the head, and a box
+whose face lies where a probe aimed far outside it must find it.
 """
 
 from __future__ import annotations
 
-import math
-
 import numpy as np
 
 from tactile_kb import solids
-from tactile_kb.geometry.planes import Face, edge_faces, merge_planes
+from tactile_kb.geometry.planes import merge_planes
 from tactile_kb.record import Contact, ExplorationRecord
 from tactile_kb.touch.finger import Orientation, builtin_finger
 from tactile_kb.touch.servo import Ending, Probe
@@ -22,54 +18,6 @@ from tactile_kb.touch.stepper import StepperExplorer
 
 FINGER = builtin_finger("33")
 RHO = FINGER.radius
-HALF = 0.075  # a 15 cm cube
-SIDES = [(1, 0, 0), (-1, 0, 0), (0, 1, 0), (0, -1, 0), (0, 0, 1)]
-TABLE = Face((0.0, 0.0, -1.0), 0.0, 0, 0.0, 0.0, (), False, "table")
-
-
-def _cube_faces() -> tuple[list[Face], np.ndarray]:
-    """The five touched faces of a 15 cm cube standing on the table, each with nine tip
-    centres ρ out of it (a 3 × 3 grid about its middle, 3 cm apart)."""
-    faces, own = [], []
-    for n in SIDES:
-        v = np.asarray(n, dtype=float)
-        offset = HALF if n[2] == 0 else 2 * HALF
-        middle = v * offset + (np.array([0.0, 0.0, HALF]) if n[2] == 0 else 0.0)
-        a = np.cross(v, [0.0, 0.0, 1.0] if n[2] == 0 else [1.0, 0.0, 0.0])
-        a /= np.linalg.norm(a)
-        b = np.cross(v, a)
-        start = len(own)
-        own += [middle + RHO * v + 0.03 * (i * a + j * b) for i in (-1, 0, 1) for j in (-1, 0, 1)]
-        contacts = tuple(range(start, start + 9))
-        faces.append(Face(tuple(map(float, v)), offset, 9, 0.0002, 0.5, contacts, True))
-    return faces, np.asarray(own)
-
-
-def _one_spot_on_the_rounding(r: float, deeper: float = 0.0) -> tuple[list[Face], np.ndarray]:
-    """The cube's faces and a face touched at one spot (three tip centres along a line
-    beside each other, their sensor square to the bisector) on the vertical edge x = y = HALF
-    rounded with radius ``r``, ``deeper`` metres further in than the rounding puts them."""
-    faces, own = _cube_faces()
-    m = np.array([1.0, 1.0, 0.0]) / math.sqrt(2.0)
-    axis = np.array([HALF - r, HALF - r, 0.0])
-    spot = [axis + (RHO + r - deeper) * m + [0.0, 0.0, z] for z in (0.07, 0.075, 0.08)]
-    centres = np.vstack([own, spot])
-    n = len(own)
-    offset = float(m @ spot[0]) - RHO
-    edge = Face((m[0], m[1], 0.0), offset, 3, 0.0, 13.0, (n, n + 1, n + 2), False)
-    return [*faces, edge, TABLE], centres
-
-
-def test_a_one_spot_touch_of_a_widely_rounded_edge_is_an_edge_touch() -> None:
-    # r = 12 mm (8 % of the 15 cm faces): the tip on the rounding's bisector lies
-    # r (1 − cos 45°) = 3.5 mm inside the sharp cube's ρ-offset, deeper than half a tip
-    # radius into the nearest faces' planes, which it still lies against.
-    faces, centres = _one_spot_on_the_rounding(0.012)
-    assert edge_faces(faces, centres, RHO, rounding=0.10) == [5]
-    # the same spot 25 mm further in: a corner cut off, deeper than the widest rounding (10 %
-    # of the faces' width) puts a tip
-    faces, centres = _one_spot_on_the_rounding(0.012, deeper=0.025)
-    assert edge_faces(faces, centres, RHO, rounding=0.10) == []
 
 
 def _record(directions: np.ndarray, orientation: tuple[float, float]) -> ExplorationRecord:

@@ -1202,8 +1202,7 @@ def edge_faces(
     other faces bound, while a face of the object lies where the others' polyhedron would
     overshoot it. A face is an edge face when the largest *penetration* of its tip centres into
     the others' polyhedron grown by ρ is at most ``rounding`` × the width of the widest face it
-    lies against (the largest rounding of such an edge penetrates by about its radius; a
-    centre lies against the grown planes within ρ/2 of its depth inside the nearest one) plus
+    lies against (the largest rounding of such an edge penetrates by about its radius) plus
     :data:`EDGE_SIGMAS` × ``noise``/√m, and that face is at least
     :data:`EDGE_MIN_WIDTH` tip radii wide. Only faces whose centres span no plane of their own
     (one contact, or contacts along a line) and no more touched than the faces they lie
@@ -1291,11 +1290,7 @@ def edge_faces(
                 -outside.max(axis=1),
                 -np.linalg.norm(c - q, axis=1),
             )
-            # the planes it lies against: within half a tip radius of the nearest (a centre
-            # inside the grown polyhedron, on a rounding, lies as deep inside its nearest
-            # plane as it penetrates)
-            depth = np.maximum(penetration, 0.0)[:, None]
-            near = np.abs(q @ poly.normals.T - grown) <= depth + 0.5 * rho + 1e-9
+            near = np.abs(q @ poly.normals.T - grown) <= 0.5 * rho + 1e-9
             against = [others[int(poly.plane_index[fi])] for fi in np.flatnonzero(near.any(0))]
             # the widest of them: next to it may lie another edge face, not yet removed
             width = max((widths.get(j, 0.0) for j in against), default=0.0)
