@@ -749,6 +749,21 @@ def _is_quantised(directions: FloatArray, sensors: FloatArray) -> bool:
     return bool(found.all())
 
 
+def _head_frame(directions: FloatArray, orientations: Sequence[Sequence[float]]) -> FloatArray:
+    """The world ``directions`` in the frame of the finger that reported each (its head at
+    ``orientations``, tilt and turn in degrees, as :attr:`tactile_kb.record.Contact.orientation`
+    holds them): a tilted probe's sensors are the layout's sensors turned with the head, and
+    their quantisation is read in the layout's frame."""
+    o = np.radians(np.asarray(orientations, dtype=float).reshape(-1, 2))
+    if len(o) == 0 or not o.any():
+        return directions
+    ct, st, ca, sa = np.cos(o[:, 0]), np.sin(o[:, 0]), np.cos(o[:, 1]), np.sin(o[:, 1])
+    x, y, z = directions[:, 0], directions[:, 1], directions[:, 2]
+    # undo the turn about +z, then the tilt about the horizontal axis
+    xt, yt = ca * x + sa * y, -sa * x + ca * y
+    return np.column_stack([ct * xt - st * z, yt, st * xt + ct * z])
+
+
 def contact_arrays(contacts: Sequence[Contact]) -> tuple[FloatArray, FloatArray, FloatArray]:
     """The contacts' tip centres, sensor directions r0 and points r1 as three (m, 3) arrays.
 
@@ -870,7 +885,9 @@ def merge_plane_arrays(
     tol = split_tol if split_tol is not None else max(current().geometry.split_tol, 6.0 * noise)
     faces: list[Face] = []
     if len(chosen):
-        quantised = _is_quantised(arrays[1], sensors)
+        quantised = _is_quantised(arrays[1], sensors) or _is_quantised(
+            _head_frame(arrays[1], [record.contacts[i].orientation for i in chosen]), sensors
+        )
         faces = _faces_from_contacts(
             record.tip_radius,
             arrays,

@@ -231,7 +231,10 @@ class Probe:
 
     The finger goes round the object (up over the hint box, across, down) to a point
     ``target + normal × (reach + clearance)`` outside it and approaches along ``−normal``
-    until a sensor closes, then slides a little along the surface it touched.
+    until a sensor closes, then slides a little along the surface it touched. A ``target``
+    so far outside the hint box that this point lies outside the workspace is approached
+    from where the line through it along ``normal`` leaves the hint box (plus the clearance):
+    the object lies inside the box.
 
     Attributes
     ----------
@@ -718,6 +721,16 @@ class Controller:
             far[2] = floor
             if float(np.linalg.norm(target - far)) > 1e-9:
                 self._approach = _unit(target - far)
+        length = float(np.linalg.norm(far - target)) + p.reach
+        if not self.world.workspace.contains(_v3(far)):
+            # a target far outside the hint box (a corner of a model that lacks a face): the
+            # object lies inside the box, so the approach starts where its line leaves it
+            exit_ = _line_exit(target, normal, lo, hi)
+            if exit_ is not None and exit_ + clear + p.reach > 0.0:
+                start = target + normal * (exit_ + clear)
+                if start[2] >= floor and self.world.workspace.contains(_v3(start)):
+                    far, length = start, exit_ + clear + p.reach
+                    self._approach = -normal
         if not self.world.workspace.contains(_v3(far)):
             self._note(
                 f"a probe ({p.reason}) would start outside the workspace at {_fmt(_v3(far))}"
@@ -726,7 +739,7 @@ class Controller:
         if not self._go_round(far, p.reason, pose):
             return False
         here = np.asarray(self._last_pos, dtype=float)
-        m = self._move(here, self._approach, float(np.linalg.norm(far - target)) + p.reach)
+        m = self._move(here, self._approach, length)
         if m.event != "touch":
             self._note(f"a probe ({p.reason}) found nothing ({m.event})")
             return False
@@ -1728,6 +1741,23 @@ def _centre(contacts: Sequence[Contact]) -> FloatArray | None:
         return None
     centre: FloatArray = np.asarray([c.centre for c in contacts], dtype=float).mean(axis=0)
     return centre
+
+
+def _line_exit(
+    point: FloatArray, direction: FloatArray, lo: FloatArray, hi: FloatArray
+) -> float | None:
+    """The largest t with ``point + t · direction`` inside the box [``lo``, ``hi``], or None
+    when the line misses the box."""
+    enter, leave = -math.inf, math.inf
+    for k in range(3):
+        if abs(float(direction[k])) < 1e-12:
+            if not float(lo[k]) <= float(point[k]) <= float(hi[k]):
+                return None
+            continue
+        a = (float(lo[k]) - float(point[k])) / float(direction[k])
+        b = (float(hi[k]) - float(point[k])) / float(direction[k])
+        enter, leave = max(enter, min(a, b)), min(leave, max(a, b))
+    return leave if enter <= leave and math.isfinite(leave) else None
 
 
 def _fmt(p: Sequence[float]) -> str:
