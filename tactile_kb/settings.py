@@ -473,6 +473,33 @@ class FeatureSettings(_Group):
         ge=1,
         description="At least this many smooth edges make a curved surface.",
     )
+    circle_faces: int = Field(
+        4,
+        ge=3,
+        description="Faces: at least this many faces around one axis whose tip centres lie on one "
+        "circle (circle_rho, circle_arc_deg) make a curved surface (a lying cylinder touched "
+        "in narrow facets).",
+    )
+    circle_rho: float = Field(
+        0.05,
+        gt=0,
+        description="Tip radii (RMS, at least circle_sigmas σ): tip centres of faces around one "
+        "axis that miss one circle by no more than this, over circle_arc_deg, with a radius "
+        "over 1.5 ρ and sensors that turn with them, lie on a curved surface.",
+    )
+    circle_sigmas: float = Field(
+        1.5,
+        ge=0,
+        description="Standard deviations of the declared noise: the least RMS miss of the tip "
+        "centres from their circle allowed (circle_rho).",
+    )
+    circle_arc_deg: float = Field(
+        90.0,
+        gt=0,
+        le=360,
+        description="Degrees: the tip centres on one circle (circle_rho) must go at least this "
+        "far round it.",
+    )
     rel_tol: float = Field(
         0.06,
         gt=0,
