@@ -94,6 +94,11 @@ CORNER_PROBES = 3
 modelled corner that juts out from the touched points far more than the model's other corners
 do, once; like the path's, they never hold the completion open."""
 
+EDGE_EXPLAINED = 1.0
+"""Tip radii (or 4 σ of the declared noise, when more): an edge touch whose surface point lies
+further than this from every edge of the model touched an edge the model lacks; the corners
+beyond it are tested (:func:`corner_probes`, :func:`_beyond_unexplained_edges`)."""
+
 CORNER_OUTLIER = 1.5
 """A corner is checked when it juts out from the touched points more than this many times the
 median of the model's corners (:func:`corner_probes`)."""
@@ -580,11 +585,17 @@ def corner_probes(model: ObjectModel) -> list[Probe]:
         and model.face_of[k] >= 0
         and model.faces[model.face_of[k]].source == "table"
     }
+    # corners beyond an edge the touches found inside a face of the model: tested whether
+    # or not they jut out more than the others
+    beyond = _beyond_unexplained_edges(model)
+    floor = max(2.0 * rho + 3.0 * sigma, 0.05 * size)
     out: list[Probe] = []
     for i in np.argsort(-juts):
         jut = float(juts[i])
-        if jut <= limit:
-            break
+        if jut <= (floor if int(i) in beyond else limit):
+            if jut <= floor:
+                break
+            continue
         v = np.asarray(poly.vertices[i], dtype=float)
         if any(float(f.normal_array @ v) - f.offset > tol for f in concave):
             continue
@@ -612,6 +623,51 @@ def corner_probes(model: ObjectModel) -> list[Probe]:
     for p in _table_corner_probes(model, hull, table):
         if not any(float(f.normal_array @ np.asarray(p.target)) - f.offset > tol for f in concave):
             out.append(p)
+    return out
+
+
+def _beyond_unexplained_edges(model: ObjectModel) -> set[int]:
+    """The model's corners beyond an edge that the touches found and the model lacks.
+
+    A touch the model sets apart as an edge's (``options["edge_contacts"]``: its sensor turned
+    between two faces' normals) whose surface point lies further than ``EDGE_EXPLAINED`` ρ
+    (or 4 σ of the declared noise) from every edge of the model's polyhedron touched an edge
+    inside one of the model's faces: a face nobody touched begins there (a disc standing on a
+    narrow side of its octagon, whose contour layer passed just above the top of a vertical
+    side; the model runs that side on to the top and closes as a box). The corners of the
+    faces it lies on that lie the way its sensor tilts out of the face (towards the face not
+    found) are returned; :func:`corner_probes` tests them however the model's other corners
+    jut out (all a model's corners jut out alike when a whole band of faces is missing)."""
+    poly = model.polyhedron
+    record = model.record
+    edge = model.options.get("edge_contacts", ())
+    if poly is None or not edge or not isinstance(edge, tuple):
+        return set()
+    rho, sigma = record.tip_radius, record.noise
+    tol = max(EDGE_EXPLAINED * rho, 4.0 * sigma)
+    verts = np.asarray(poly.vertices, dtype=float)
+    ends = np.asarray(poly.edges, dtype=int).reshape(-1, 2)
+    a, b = verts[ends[:, 0]], verts[ends[:, 1]]
+    ab = b - a
+    length2 = np.maximum((ab * ab).sum(axis=1), 1e-18)
+    out: set[int] = set()
+    for i in edge:
+        if not isinstance(i, int) or not 0 <= i < len(record.contacts):
+            continue
+        c = record.contacts[i]
+        p = np.asarray(c.point, dtype=float)
+        t = np.clip(((p - a) * ab).sum(axis=1) / length2, 0.0, 1.0)
+        if float(np.linalg.norm(a + t[:, None] * ab - p, axis=1).min()) <= tol:
+            continue  # an edge of the model: explained
+        outward = -np.asarray(c.direction, dtype=float)
+        for k, ring in enumerate(poly.faces):
+            n = poly.normals[k]
+            if abs(float(n @ p) - float(poly.offsets[k])) > tol:
+                continue
+            tilt = outward - float(outward @ n) * n  # towards the face not found
+            if float(np.linalg.norm(tilt)) < math.sin(math.radians(5.0)):
+                continue
+            out.update(int(j) for j in ring if float((verts[int(j)] - p) @ tilt) > 0.0)
     return out
 
 
