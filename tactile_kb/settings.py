@@ -474,7 +474,7 @@ class FeatureSettings(_Group):
         description="At least this many smooth edges make a curved surface.",
     )
     circle_faces: int = Field(
-        4,
+        5,
         ge=3,
         description="Faces: at least this many faces around one axis whose tip centres lie on one "
         "circle (circle_rho, circle_arc_deg) make a curved surface (a lying cylinder touched "
@@ -483,15 +483,16 @@ class FeatureSettings(_Group):
     circle_rho: float = Field(
         0.05,
         gt=0,
-        description="Tip radii (RMS, at least circle_sigmas σ): tip centres of faces around one "
+        description="Tip radii (RMS, or circle_ratio × the faces' scatter): tip centres of faces around one "
         "axis that miss one circle by no more than this, over circle_arc_deg, with a radius "
         "over 1.5 ρ and sensors that turn with them, lie on a curved surface.",
     )
-    circle_sigmas: float = Field(
-        1.5,
-        ge=0,
-        description="Standard deviations of the declared noise: the least RMS miss of the tip "
-        "centres from their circle allowed (circle_rho).",
+    circle_ratio: float = Field(
+        1.25,
+        gt=0,
+        description="Factor: the RMS miss of the tip centres from their circle (circle_rho) may "
+        "exceed the faces' own scatter about their planes by at most this (a polyhedron's "
+        "faces fit their planes better than a circle under noise).",
     )
     circle_arc_deg: float = Field(
         90.0,

@@ -598,11 +598,17 @@ def centres_on_circle(model: ObjectModel) -> bool:
     they lie on the faces' offset planes, straight across each face, joined by arcs of
     radius ρ at its edges. Candidate axes are the cross products of two faces' normals; the
     faces whose normals lie within ``horizontal_deg`` of square to one (the features'
-    lateral tolerance) are the chain around it. Curved when at least ``circle_faces`` such
+    lateral tolerance) are the chain around it. Curved when at least ``circle_faces`` (5) such
     faces have centres that, seen along the axis,
 
-    * miss one circle by an RMS of at most ``circle_rho`` ρ (or ``circle_sigmas`` σ of the
-      declared noise, when more),
+    * miss one circle by an RMS of at most ``circle_rho`` ρ, or ``circle_ratio`` × the faces'
+      own scatter about their planes when more (pooled over the chain's refined faces, the
+      declared σ when they have fewer than three degrees of freedom): under noise a
+      polyhedron's faces fit their planes within the noise and a circle only worse (a small
+      icosahedron's ring of faces misses a circle by as much again), a curved surface's
+      facets fit their planes no better than the circle (a ring of four faces of an
+      icosahedron lies square to one axis and, touched near their middles, on a circle within
+      the noise: hence five faces),
     * go round it by at least ``circle_arc_deg`` (a flat face's centres lie on a line, which
       fits a huge circle over a small arc),
     * on a circle of radius over 1.5 ρ (a surface radius over ρ/2: a sharp edge's centres
@@ -631,7 +637,6 @@ def centres_on_circle(model: ObjectModel) -> bool:
         else:
             spacing = math.radians(30.0)
         square = math.sin(math.radians(s.horizontal_deg))
-        tol = max(s.circle_rho * rho, s.circle_sigmas * sigma)
         tried: list[FloatArray] = []
         for i in range(len(faces)):
             for j in range(i + 1, len(faces)):
@@ -657,7 +662,18 @@ def centres_on_circle(model: ObjectModel) -> bool:
                 if len(pts) < 2 * s.circle_faces:
                     continue
                 c, r, miss = _circle_fit(pts)
-                if not (r > 1.5 * rho and float(np.sqrt(np.mean(miss**2))) <= tol):
+                # the faces' own scatter about their planes (pooled over the refined ones;
+                # the declared noise when they have too few degrees of freedom)
+                dof = sum(len(faces[k].contacts) - 3 for k in chain if faces[k].refined)
+                sse = sum(
+                    len(faces[k].contacts) * faces[k].residual ** 2
+                    for k in chain
+                    if faces[k].refined
+                )
+                scatter = math.sqrt(sse / dof) if dof >= 3 else sigma
+                tol = max(s.circle_rho * rho, s.circle_ratio * scatter)
+                rms = math.sqrt(float((miss**2).sum()) / (len(miss) - 3))
+                if not (r > 1.5 * rho and rms <= tol):
                     continue
                 ang = np.sort(np.arctan2(pts[:, 1] - c[1], pts[:, 0] - c[0]))
                 gaps = np.diff(np.append(ang, ang[0] + 2.0 * math.pi))
