@@ -488,11 +488,12 @@ class FeatureSettings(_Group):
         "over 1.5 ρ and sensors that turn with them, lie on a curved surface.",
     )
     circle_ratio: float = Field(
-        1.25,
-        gt=0,
+        0.0,
+        ge=0,
         description="Factor: the RMS miss of the tip centres from their circle (circle_rho) may "
         "exceed the faces' own scatter about their planes by at most this (a polyhedron's "
-        "faces fit their planes better than a circle under noise).",
+        "faces fit their planes better than a circle under noise); 0, the default: only "
+        "circle_rho (at 1.25 a small octagonal prism under 0.5 mm noise fits a circle too).",
     )
     circle_arc_deg: float = Field(
         90.0,

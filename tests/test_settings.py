@@ -90,7 +90,7 @@ DOCUMENTED: dict[str, dict[str, float | str]] = {
         "min_smooth_edges": 6,
         "circle_faces": 5,
         "circle_rho": 0.05,
-        "circle_ratio": 1.25,
+        "circle_ratio": 0.0,
         "circle_arc_deg": 90.0,
         "rel_tol": 0.06,
         "edge_sigmas": 4.0,

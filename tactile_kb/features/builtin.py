@@ -603,7 +603,9 @@ def centres_on_circle(model: ObjectModel) -> bool:
 
     * miss one circle by an RMS of at most ``circle_rho`` ρ, or ``circle_ratio`` × the faces'
       own scatter about their planes when more (pooled over the chain's refined faces, the
-      declared σ when they have fewer than three degrees of freedom): under noise a
+      declared σ when they have fewer than three degrees of freedom; ``circle_ratio`` is 0 by
+      default: at 1.25 a lying cylinder under 0.5 mm noise is mostly found curved, but so is
+      a small octagonal prism, 1.5 cm across, standing): under noise a
       polyhedron's faces fit their planes within the noise and a circle only worse (a small
       icosahedron's ring of faces misses a circle by as much again), a curved surface's
       facets fit their planes no better than the circle (a ring of four faces of an
