@@ -94,6 +94,11 @@ CORNER_PROBES = 3
 modelled corner that juts out from the touched points far more than the model's other corners
 do, once; like the path's, they never hold the completion open."""
 
+EDGE_EXPLAINED = 1.0
+"""Tip radii (or 4 σ of the declared noise, when more): an edge touch whose surface point lies
+further than this from every edge of the model touched an edge the model lacks; the corners
+beyond it are tested (:func:`corner_probes`, :func:`_beyond_unexplained_edges`)."""
+
 CORNER_OUTLIER = 1.5
 """A corner is checked when it juts out from the touched points more than this many times the
 median of the model's corners (:func:`corner_probes`)."""
@@ -580,11 +585,19 @@ def corner_probes(model: ObjectModel) -> list[Probe]:
         and model.face_of[k] >= 0
         and model.faces[model.face_of[k]].source == "table"
     }
+    # corners beyond an edge the touches found inside a face of the model: tested whether
+    # or not they jut out more than the others
+    beyond = _beyond_unexplained_edges(model)
+    past_hint = _past_the_hint(model)
+    beyond |= past_hint
+    floor = max(2.0 * rho + 3.0 * sigma, 0.05 * size)
     out: list[Probe] = []
     for i in np.argsort(-juts):
         jut = float(juts[i])
-        if jut <= limit:
-            break
+        if jut <= (floor if int(i) in beyond else limit):
+            if jut <= floor:
+                break
+            continue
         v = np.asarray(poly.vertices[i], dtype=float)
         if any(float(f.normal_array @ v) - f.offset > tol for f in concave):
             continue
@@ -609,13 +622,81 @@ def corner_probes(model: ObjectModel) -> list[Probe]:
         out.append(
             Probe(_v(target), _v(n), depth + 2.0 * rho, f"{_CORNER} at {_name(v * 1000.0)} mm")
         )
-    for p in _table_corner_probes(model, hull, table):
+    for p in _table_corner_probes(model, hull, table, past_hint):
         if not any(float(f.normal_array @ np.asarray(p.target)) - f.offset > tol for f in concave):
             out.append(p)
     return out
 
 
-def _table_corner_probes(model: ObjectModel, hull: ConvexHull, table: set[int]) -> list[Probe]:
+def _beyond_unexplained_edges(model: ObjectModel) -> set[int]:
+    """The model's corners beyond an edge that the touches found and the model lacks.
+
+    A touch the model sets apart as an edge's (``options["edge_contacts"]``: its sensor turned
+    between two faces' normals) whose surface point lies further than ``EDGE_EXPLAINED`` ρ
+    (or 4 σ of the declared noise) from every edge of the model's polyhedron touched an edge
+    inside one of the model's faces: a face nobody touched begins there (a disc standing on a
+    narrow side of its octagon, whose contour layer passed just above the top of a vertical
+    side; the model runs that side on to the top and closes as a box). The corners of the
+    faces it lies on that lie the way its sensor tilts out of the face (towards the face not
+    found) are returned; :func:`corner_probes` tests them however the model's other corners
+    jut out (all a model's corners jut out alike when a whole band of faces is missing)."""
+    poly = model.polyhedron
+    record = model.record
+    edge = model.options.get("edge_contacts", ())
+    if poly is None or not edge or not isinstance(edge, tuple):
+        return set()
+    rho, sigma = record.tip_radius, record.noise
+    tol = max(EDGE_EXPLAINED * rho, 4.0 * sigma)
+    verts = np.asarray(poly.vertices, dtype=float)
+    ends = np.asarray(poly.edges, dtype=int).reshape(-1, 2)
+    a, b = verts[ends[:, 0]], verts[ends[:, 1]]
+    ab = b - a
+    length2 = np.maximum((ab * ab).sum(axis=1), 1e-18)
+    out: set[int] = set()
+    for i in edge:
+        if not isinstance(i, int) or not 0 <= i < len(record.contacts):
+            continue
+        c = record.contacts[i]
+        p = np.asarray(c.point, dtype=float)
+        t = np.clip(((p - a) * ab).sum(axis=1) / length2, 0.0, 1.0)
+        if float(np.linalg.norm(a + t[:, None] * ab - p, axis=1).min()) <= tol:
+            continue  # an edge of the model: explained
+        outward = -np.asarray(c.direction, dtype=float)
+        for k, ring in enumerate(poly.faces):
+            n = poly.normals[k]
+            if abs(float(n @ p) - float(poly.offsets[k])) > tol:
+                continue
+            tilt = outward - float(outward @ n) * n  # towards the face not found
+            if float(np.linalg.norm(tilt)) < math.sin(math.radians(5.0)):
+                continue
+            out.update(int(j) for j in ring if float((verts[int(j)] - p) @ tilt) > 0.0)
+    return out
+
+
+def _past_the_hint(model: ObjectModel) -> set[int]:
+    """The model's corners outside the visual hint box (``hint_lo_*``, ``hint_hi_*`` in
+    ``record.params``: the object's visual extent, grown by the tip) by more than 2 ρ + 3 σ.
+
+    The object lies inside its hint: a corner that far outside it is where the planes of
+    touched faces run on past a face nobody touched (a lying frustum's small end, its sides
+    meeting in an apex 2 cm past the object's end). :func:`corner_probes` tests them however
+    the other corners jut out, and on the table also when a side overhangs."""
+    poly = model.polyhedron
+    params = model.record.params
+    keys = [f"hint_{e}_{a}" for e in ("lo", "hi") for a in "xyz"]
+    if poly is None or not all(k in params for k in keys):
+        return set()
+    lo = np.array([params[k] for k in keys[:3]])
+    hi = np.array([params[k] for k in keys[3:]])
+    margin = 2.0 * model.record.tip_radius + 3.0 * model.record.noise
+    verts = np.asarray(poly.vertices, dtype=float)
+    out = ((lo - margin > verts) | (verts > hi + margin)).any(axis=1)
+    return {int(i) for i in np.flatnonzero(out)}
+
+
+def _table_corner_probes(
+    model: ObjectModel, hull: ConvexHull, table: set[int], past_hint: set[int] | None = None
+) -> list[Probe]:
     """Level probes of the model's corners on the table that jut out sideways beyond
     everything touched: further than 2 ρ + 3 σ, 5 % of the model's diameter and
     :data:`CORNER_OUTLIER` × the median of the table corners outside the convex hull of the
@@ -627,7 +708,8 @@ def _table_corner_probes(model: ObjectModel, hull: ConvexHull, table: set[int]) 
 
     Asked only of a model none of whose sides overhangs (turns down by more than
     ``explore.overhang_deg``): then the object lies inside the model, and a table corner far
-    from every touch can only be cut off by a face not found yet. A side that overhangs
+    from every touch can only be cut off by a face not found yet; and of the corners in
+    ``past_hint`` (:func:`_past_the_hint`), which no face of the object reaches, in any case. A side that overhangs
     puts the model's table corners where its plane, known from a touch or two, meets the
     table; a level probe there meets the undercut's edge, whose touches fit no face (the
     lying hexagonal pyramids of the stable-pose benchmark), so those corners are left to
@@ -649,15 +731,22 @@ def _table_corner_probes(model: ObjectModel, hull: ConvexHull, table: set[int]) 
     on_table = [i for i in range(len(verts)) if any(k in table for k in around[i])]
     sides = [k for k in range(len(poly.faces)) if k not in table]
     overhang = math.sin(math.radians(current().explore.overhang_deg))
-    if not on_table or float(poly.normals[sides, 2].min()) < -overhang:
+    past = past_hint or set()
+    if not on_table:
         return []
-    # the table corners of a model whose sides were all touched lie alike outside that
-    # outline (the layers' spacing): an outlier among them is tested
-    limit = max(limit, CORNER_OUTLIER * float(np.median(out[on_table])))
+    if float(poly.normals[sides, 2].min()) < -overhang:
+        on_table = [i for i in on_table if i in past]  # an overhang: only what no face reaches
+        if not on_table:
+            return []
+        limit = math.inf
+    else:
+        # the table corners of a model whose sides were all touched lie alike outside that
+        # outline (the layers' spacing): an outlier among them is tested
+        limit = max(limit, CORNER_OUTLIER * float(np.median(out[on_table])))
     probes = []
     for i in sorted(on_table, key=lambda j: -float(out[j])):
-        if float(out[i]) <= limit:
-            break
+        if float(out[i]) <= limit and i not in past:
+            continue
         sides = [k for k in around[i] if k not in table]
         if not sides:
             continue

@@ -473,6 +473,35 @@ class FeatureSettings(_Group):
         ge=1,
         description="At least this many smooth edges make a curved surface.",
     )
+    circle_faces: int = Field(
+        5,
+        ge=3,
+        description="Faces: at least this many faces around one axis whose tip centres lie on one "
+        "circle (circle_rho, circle_arc_deg) make a curved surface (a lying cylinder touched "
+        "in narrow facets).",
+    )
+    circle_rho: float = Field(
+        0.05,
+        gt=0,
+        description="Tip radii (RMS, or circle_ratio × the faces' scatter): tip centres of faces around one "
+        "axis that miss one circle by no more than this, over circle_arc_deg, with a radius "
+        "over 1.5 ρ and sensors that turn with them, lie on a curved surface.",
+    )
+    circle_ratio: float = Field(
+        0.0,
+        ge=0,
+        description="Factor: the RMS miss of the tip centres from their circle (circle_rho) may "
+        "exceed the faces' own scatter about their planes by at most this (a polyhedron's "
+        "faces fit their planes better than a circle under noise); 0, the default: only "
+        "circle_rho (at 1.25 a small octagonal prism under 0.5 mm noise fits a circle too).",
+    )
+    circle_arc_deg: float = Field(
+        90.0,
+        gt=0,
+        le=360,
+        description="Degrees: the tip centres on one circle (circle_rho) must go at least this "
+        "far round it.",
+    )
     rel_tol: float = Field(
         0.06,
         gt=0,

@@ -93,6 +93,7 @@ __all__ = [
     "BUILTIN_FEATURES",
     "Feature",
     "available_features",
+    "centres_on_circle",
     "check_binding",
     "edge_uncertainties",
     "evaluate_feature",
@@ -550,7 +551,7 @@ def surface_curved(
         if sag > tol:
             return True
     bent, folds = _spread_evidence(model, spread_deg)
-    if bent:
+    if bent or centres_on_circle(model):
         return True
     p = model.polyhedron
     cos_smooth = math.cos(math.radians(smooth_deg))
@@ -565,6 +566,133 @@ def surface_curved(
         return int((c.max(axis=1) > cos_smooth).sum()) >= min_smooth_edges
     smooth = int((_edge_cosines(model, p) > cos_smooth).sum())
     return smooth + folds >= min_smooth_edges
+
+
+def _circle_fit(pts: FloatArray) -> tuple[FloatArray, float, FloatArray]:
+    """The circle through 2-D points: its centre, radius and the points' signed misses
+    (algebraic fit, refined by Gauss-Newton steps on the geometric distances)."""
+    a = np.column_stack([2.0 * pts, np.ones(len(pts))])
+    sol = np.linalg.lstsq(a, (pts**2).sum(axis=1), rcond=None)[0]
+    c = np.asarray(sol[:2], dtype=float)
+    r = math.sqrt(max(float(sol[2] + c @ c), 0.0))
+    for _ in range(5):
+        d = pts - c
+        dist = np.linalg.norm(d, axis=1)
+        if float(dist.min()) < 1e-12:
+            break
+        jac = np.column_stack([-d / dist[:, None], -np.ones(len(pts))])
+        step = np.linalg.lstsq(jac, -(dist - r), rcond=None)[0]
+        c, r = c + step[:2], r + float(step[2])
+    miss = np.linalg.norm(pts - c, axis=1) - r
+    return c, r, np.asarray(miss, dtype=float)
+
+
+def centres_on_circle(model: ObjectModel) -> bool:
+    """Faces around one axis whose tip centres lie on one circle: a curved surface touched in
+    narrow facets (a thin cylinder lying on its side, whose contour layers and probes each
+    fit a facet a few millimetres wide, meeting the next at an angle the touches never saw).
+
+    Tip centres lie on the surface offset by ρ: on a cylinder of radius R they lie on a
+    circle of radius R + ρ about its axis, whichever facet the model made of them, and each
+    contact's sensor points at that axis (within the finger's sensor spacing). On a prism
+    they lie on the faces' offset planes, straight across each face, joined by arcs of
+    radius ρ at its edges. Candidate axes are the cross products of two faces' normals; the
+    faces whose normals lie within ``horizontal_deg`` of square to one (the features'
+    lateral tolerance) are the chain around it. Curved when at least ``circle_faces`` (5) such
+    faces have centres that, seen along the axis,
+
+    * miss one circle by an RMS of at most ``circle_rho`` ρ, or ``circle_ratio`` × the faces'
+      own scatter about their planes when more (pooled over the chain's refined faces, the
+      declared σ when they have fewer than three degrees of freedom; ``circle_ratio`` is 0 by
+      default: at 1.25 a lying cylinder under 0.5 mm noise is mostly found curved, but so is
+      a small octagonal prism, 1.5 cm across, standing): under noise a
+      polyhedron's faces fit their planes within the noise and a circle only worse (a small
+      icosahedron's ring of faces misses a circle by as much again), a curved surface's
+      facets fit their planes no better than the circle (a ring of four faces of an
+      icosahedron lies square to one axis and, touched near their middles, on a circle within
+      the noise: hence five faces),
+    * go round it by at least ``circle_arc_deg`` (a flat face's centres lie on a line, which
+      fits a huge circle over a small arc),
+    * on a circle of radius over 1.5 ρ (a surface radius over ρ/2: a sharp edge's centres
+      lie on a circle of radius ρ about it),
+
+    and each contact's sensor points within the finger's median sensor spacing of the circle's
+    centre. Settings ``features.circle_*``.
+    """
+
+    def compute() -> bool:
+        s = current().features
+        record = model.record
+        rho, sigma = record.tip_radius, record.noise
+        faces = [f for f in model.contact_faces if f.contacts]
+        if len(faces) < s.circle_faces:
+            return False
+        normals = np.asarray([f.normal for f in faces], dtype=float)
+        centres = np.asarray([c.centre for c in record.contacts], dtype=float)
+        directions = np.asarray([c.direction for c in record.contacts], dtype=float)
+        sensors = np.asarray(record.sensor_directions, dtype=float).reshape(-1, 3)
+        if len(sensors) >= 2:
+            m = sensors / np.linalg.norm(sensors, axis=1)[:, None]
+            cos = m @ m.T
+            np.fill_diagonal(cos, -1.0)
+            spacing = float(np.median(np.arccos(np.clip(cos.max(axis=1), -1.0, 1.0))))
+        else:
+            spacing = math.radians(30.0)
+        square = math.sin(math.radians(s.horizontal_deg))
+        tried: list[FloatArray] = []
+        for i in range(len(faces)):
+            for j in range(i + 1, len(faces)):
+                axis = np.cross(normals[i], normals[j])
+                norm = float(np.linalg.norm(axis))
+                if norm < math.sin(math.radians(5.0)):
+                    continue
+                axis = axis / norm
+                if any(abs(float(axis @ t)) > math.cos(math.radians(5.0)) for t in tried):
+                    continue
+                tried.append(axis)
+                chain = [k for k in range(len(faces)) if abs(float(normals[k] @ axis)) < square]
+                if len(chain) < s.circle_faces:
+                    continue
+                idx = sorted({c for k in chain for c in faces[k].contacts})
+                e1 = np.cross(axis, [1.0, 0.0, 0.0])
+                if float(np.linalg.norm(e1)) < 0.5:
+                    e1 = np.cross(axis, [0.0, 1.0, 0.0])
+                e1 = e1 / float(np.linalg.norm(e1))
+                e2 = np.cross(axis, e1)
+                basis = np.column_stack([e1, e2])
+                pts = centres[idx] @ basis
+                if len(pts) < 2 * s.circle_faces:
+                    continue
+                c, r, miss = _circle_fit(pts)
+                # the faces' own scatter about their planes (pooled over the refined ones;
+                # the declared noise when they have too few degrees of freedom)
+                dof = sum(len(faces[k].contacts) - 3 for k in chain if faces[k].refined)
+                sse = sum(
+                    len(faces[k].contacts) * faces[k].residual ** 2
+                    for k in chain
+                    if faces[k].refined
+                )
+                scatter = math.sqrt(sse / dof) if dof >= 3 else sigma
+                tol = max(s.circle_rho * rho, s.circle_ratio * scatter)
+                rms = math.sqrt(float((miss**2).sum()) / (len(miss) - 3))
+                if not (r > 1.5 * rho and rms <= tol):
+                    continue
+                ang = np.sort(np.arctan2(pts[:, 1] - c[1], pts[:, 0] - c[0]))
+                gaps = np.diff(np.append(ang, ang[0] + 2.0 * math.pi))
+                if math.degrees(2.0 * math.pi - float(gaps.max())) < s.circle_arc_deg:
+                    continue
+                # each sensor points at the axis: the contact direction, seen along the
+                # axis, against the direction from the centre to the circle's middle
+                d = directions[idx] @ basis
+                inward = c - pts
+                cosang = (d * inward).sum(axis=1) / np.maximum(
+                    np.linalg.norm(d, axis=1) * np.linalg.norm(inward, axis=1), 1e-12
+                )
+                if float(np.arccos(np.clip(cosang, -1.0, 1.0)).max()) <= spacing:
+                    return True
+        return False
+
+    return _derived(model, (__name__, current().features, "centres_on_circle"), compute)
 
 
 @dataclass(frozen=True)

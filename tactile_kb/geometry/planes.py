@@ -250,7 +250,16 @@ def _fit(
         span = 0.0
     else:
         line, span = np.zeros(3), 0.0
-    normal = mean_n - line * (mean_n @ line) if m >= 2 else mean_n
+    # the sensors' normal, square to the centres' line; but a "line" that runs along the
+    # sensors' normal further than a fitted normal is trusted to turn is no face's line: two
+    # parallel faces at different offsets (an L-block's step, each touched along one line)
+    # whose residuals along the sensors' normal let the group be split
+    if m >= 2 and abs(float(mean_n @ line)) < math.sin(
+        math.radians(current().geometry.max_refine_deg)
+    ):
+        normal = mean_n - line * (mean_n @ line)
+    else:
+        normal = mean_n
     normal = normal / np.linalg.norm(normal)
     res = (centres - mean_c) @ normal
     return _Fit(normal, float(normal @ mean_c), res, False, span)
