@@ -6,31 +6,14 @@ from __future__ import annotations
 import numpy as np
 import pytest
 import trimesh
+from probing import OneProbe
 
 from tactile_kb import solids
 from tactile_kb.pipeline import classify
-from tactile_kb.record import ExplorationRecord
-from tactile_kb.touch.servo import Ending, Probe
+from tactile_kb.touch.servo import Probe
 from tactile_kb.touch.stepper import StepperExplorer
 
 RHO = 0.005  # the 33-sensor finger's tip radius
-
-
-class _OneProbe:
-    """A completer that asks for one probe, then ends."""
-
-    def __init__(self, probe: Probe) -> None:
-        self.probe = probe
-        self.asked = False
-
-    def next_probe(
-        self, record: ExplorationRecord, last: tuple[Probe, bool] | None
-    ) -> Probe | Ending:
-        del record, last
-        if self.asked:
-            return Ending("closed", "one probe asked")
-        self.asked = True
-        return self.probe
 
 
 def _lying_pyramid() -> tuple[trimesh.Trimesh, np.ndarray, np.ndarray]:
@@ -61,7 +44,7 @@ def test_a_probe_of_an_undercut_face_near_the_table_touches_where_it_was_aimed(
     assert target[2] == pytest.approx(centre_z)
     explorer = StepperExplorer()
     probe = Probe(tuple(float(x) for x in target), tuple(float(x) for x in n), 4 * RHO, "test")
-    explorer.completer = lambda: _OneProbe(probe)
+    explorer.completer = lambda: OneProbe(probe)
     record = explorer.explore(mesh, finger="33", seed=0)
     touch = [c for c in record.contacts if c.kind == "touch"][-1]
     assert np.linalg.norm(np.asarray(touch.centre) - target) < 1e-4

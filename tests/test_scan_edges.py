@@ -1,4 +1,4 @@
-"""Scan-like solids, round 7 (issue 10): the quantisation of sensors read with the head
+"""Scan-like solids, round 6 (issue 10): the quantisation of sensors read with the head
 indexed, and a probe of a corner that juts out beyond the workspace.
 
 Ground truth is the geometry built here: sensor directions turned with the head, and a box
@@ -8,12 +8,13 @@ whose face lies where a probe aimed far outside it must find it.
 from __future__ import annotations
 
 import numpy as np
+from probing import OneProbe
 
 from tactile_kb import solids
 from tactile_kb.geometry.planes import merge_planes
 from tactile_kb.record import Contact, ExplorationRecord
 from tactile_kb.touch.finger import Orientation, builtin_finger
-from tactile_kb.touch.servo import Ending, Probe
+from tactile_kb.touch.servo import Probe
 from tactile_kb.touch.stepper import StepperExplorer
 
 FINGER = builtin_finger("33")
@@ -64,22 +65,6 @@ def test_a_tilted_head_keeps_its_sensors_quantised() -> None:
     assert tilted[0].normal_uncertainty_deg == vertical[0].normal_uncertainty_deg
 
 
-class _OneProbe:
-    """A completer that asks for ``probe`` once, then ends."""
-
-    def __init__(self, probe: Probe) -> None:
-        self.probe = probe
-        self.asked = False
-
-    def next_probe(
-        self, record: ExplorationRecord, last: tuple[Probe, bool] | None
-    ) -> Probe | Ending:
-        if self.asked:
-            return Ending("closed", "done")
-        self.asked = True
-        return self.probe
-
-
 def test_a_probe_aimed_far_outside_the_object_starts_where_its_line_leaves_the_hint() -> None:
     # A model that lacks a face puts a corner where its neighbours' planes meet, possibly
     # further out than the workspace reaches (bounds + 15 cm). The object lies inside the
@@ -87,7 +72,7 @@ def test_a_probe_aimed_far_outside_the_object_starts_where_its_line_leaves_the_h
     # touches the face the model lacks.
     box = solids.box(0.08, 0.06, 0.05)  # x in ±4 cm
     far = Probe((0.40, 0.0, 0.025), (1.0, 0.0, 0.0), 0.40, "a corner juts out (test)")
-    explorer = StepperExplorer(completer=lambda: _OneProbe(far))
+    explorer = StepperExplorer(completer=lambda: OneProbe(far))
     record = explorer.explore(box, seed=0)
     probed = [c for c in record.contacts if c.phase == "complete" and c.kind == "touch"]
     assert not [n for n in record.notes if "outside the workspace" in n]
