@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from test_planes_split import _contacts
 
 from tactile_kb import solids
 from tactile_kb.features.builtin import centres_on_circle
@@ -67,22 +68,8 @@ def _line(
     """Slide contacts on the vertical plane ``normal · x = offset`` at height ``z``, at the
     positions ``along`` its horizontal tangent, reported by the sensor ``direction``."""
     tangent = np.cross([0.0, 0.0, 1.0], normal)
-    out = []
-    for k, u in enumerate(along):
-        p = offset * normal + u * tangent + np.array([0.0, 0.0, z])
-        c = p + RHO * normal
-        out.append(
-            Contact(
-                step=start + k,
-                centre=(float(c[0]), float(c[1]), float(c[2])),
-                sensors=(0,),
-                sensor=0,
-                direction=(float(direction[0]), float(direction[1]), float(direction[2])),
-                point=tuple(float(v) for v in c + RHO * direction),
-                kind="slide",
-            )
-        )
-    return out
+    points = np.array([offset * normal + u * tangent + np.array([0.0, 0.0, z]) for u in along])
+    return _contacts(normal, points, direction, start)
 
 
 def test_two_parallel_faces_each_touched_along_one_line_stay_two() -> None:
