@@ -1,7 +1,8 @@
 """Objects in their stable poses: every family, every resting pose gravity leaves it in.
 
 Run: ``.venv/bin/python benchmarks/bench_poses.py [--turns N] [--family NAME ...] [--seed N]
-[--explorer stepper|mujoco] [--shaft RADIUS] [--workers N] [--match TEXT]``.
+[--explorer stepper|mujoco] [--shaft RADIUS] [--workers N] [--match TEXT] [--noisy-only]
+[--set GROUP.FIELD=VALUE ...]``.
 It never fails; it prints, per family and mode (exact contacts, 0.5 mm noise), the share of
 right answers, the median touches per face, and the wall time per object with the share of
 the motions' time spent with the head indexed away from the vertical; then every wrong case.
@@ -18,7 +19,8 @@ The true labels come from the construction (bench_accuracy's builders), never
 from the code under test: a pose changes where an object lies, not what it is.
 
 ``--explorer mujoco`` runs the same instances (the same seeds draw the same objects, poses and
-turns) in the MuJoCo plugin's world; ``--shaft RADIUS`` gives the 33-sensor finger a colliding
+turns) in the MuJoCo plugin's world; ``--set`` runs every case under changed settings (as the
+command line's ``--set``), to measure a setting on the same cases; ``--shaft RADIUS`` gives the 33-sensor finger a colliding
 stem of that radius (metres), in either world. With MuJoCo the last column is the share of the
 wall time spent simulating the head's turns.
 """
@@ -40,7 +42,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 from bench_accuracy import FAMILIES, NOISE, Family, faces_to_touch
 
-from tactile_kb import solids
+from tactile_kb import settings, solids
 from tactile_kb.pipeline import classify
 from tactile_kb.touch.finger import builtin_finger
 from tactile_kb.touch.stepper import StepperExplorer, StepperWorld
@@ -153,21 +155,24 @@ def _job(job: dict) -> dict:  # type: ignore[type-arg]
     _Clock.motions = _Clock.indexed = _Clock.turning = 0.0
     m = job["mesh"]
     t = time.perf_counter()
+    ending = ""
     try:
-        r = classify(
-            m,
-            rules=job["rules"],
-            noise=job["noise"],
-            seed=1,
-            finger=finger,
-            explorer=_TimedExplorer() if job["explorer"] == "stepper" else _mujoco_explorer(),
-        )
-        got, touches = r.decision.label, r.record.touches
+        with settings.use(settings.DEFAULTS.assigned(job["set"])):
+            r = classify(
+                m,
+                rules=job["rules"],
+                noise=job["noise"],
+                seed=1,
+                finger=finger,
+                explorer=_TimedExplorer() if job["explorer"] == "stepper" else _mujoco_explorer(),
+            )
+            got, touches, ending = r.decision.label, r.record.touches, r.record.ending
     except Exception as exc:  # a benchmark reports, it does not stop
         got, touches = f"error: {type(exc).__name__}: {exc}"[:160], 0
     return {
         "got": got,
         "touches": touches,
+        "ending": ending,
         "seconds": time.perf_counter() - t,
         "faces": faces_to_touch(m),
         "motions": _Clock.motions,
@@ -182,6 +187,14 @@ def main() -> None:
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--family", nargs="*", default=None)
     ap.add_argument("--exact-only", action="store_true")
+    ap.add_argument("--noisy-only", action="store_true")
+    ap.add_argument(
+        "--set",
+        action="append",
+        default=[],
+        metavar="GROUP.FIELD=VALUE",
+        help="run every case with this setting changed (repeatable; as the command line's --set)",
+    )
     ap.add_argument(
         "--match",
         action="append",
@@ -196,9 +209,15 @@ def main() -> None:
         "--workers", type=int, default=1, help="processes (the same instances, in parallel)"
     )
     args = ap.parse_args()
+    if args.exact_only and args.noisy_only:
+        ap.error("--exact-only and --noisy-only exclude each other")
+    try:
+        settings.DEFAULTS.assigned(args.set)
+    except Exception as exc:  # a usage error, located to the argument
+        ap.error(str(exc))
     print(f"explorer {args.explorer}, finger 33, stem radius {args.shaft or 'none'}")
     families = [f for f in ALL if not args.family or f.name in args.family]
-    modes = [0.0] if args.exact_only else [0.0, NOISE]
+    modes = [0.0] if args.exact_only else [NOISE] if args.noisy_only else [0.0, NOISE]
     # every instance, pose and turn is drawn first from the family's own generator (seeded by
     # --seed and the family's name), so that --workers, --family, --exact-only and --match
     # change only which cases run and where, never what a case is
@@ -224,6 +243,7 @@ def main() -> None:
                             "noise": noise,
                             "explorer": args.explorer,
                             "shaft": args.shaft,
+                            "set": args.set,
                             "what": f"{fam.name} pose {k} (p={p:.2f}) turned {ang:.0f}° "
                             f"noise {noise * 1000:g} mm",
                             "label": label,
@@ -258,7 +278,10 @@ def main() -> None:
         right = sum(o["got"] == j["label"] for o, j in zip(outs, jobs, strict=True))
         for o, j in zip(outs, jobs, strict=True):
             if o["got"] != j["label"]:
-                wrong.append(f"{j['what']}: {o['got']} (want {j['label']}); {j['desc']}")
+                wrong.append(
+                    f"{j['what']}: {o['got']} (want {j['label']}); {j['desc']}; "
+                    f"{o['ending'] or 'no ending'} after {o['touches']} touches"
+                )
         per_face = [o["touches"] / max(1, o["faces"]) for o in outs]
         secs = [o["seconds"] for o in outs]
         motions = sum(o["motions"] for o in outs)

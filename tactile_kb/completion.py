@@ -120,9 +120,9 @@ class CompletionParams:
         At most this many touches spent by the completion (or two per face of the model, when
         that is more; the path budget grows in proportion). Default 24.
     path
-        At most this much tip-centre path (metres) spent by the completion, or three times the
-        touched extent per touch of the budget when that is more (each probe goes round the
-        object). Default 4 m.
+        At most this much tip-centre path (metres) spent by the completion, or
+        ``explore.completion_path_sizes`` (4) times the touched extent per touch of the budget
+        when that is more (each probe goes round the object; some touch nothing). Default 4 m.
     attempts
         Probes for one open item (a direction, a face) before it counts as unreachable (when
         they found nothing, or what they found did not close it). Default 2.
@@ -1201,7 +1201,8 @@ class ModelCompleter:
         # a probe goes round the object: large objects get path in proportion to their size
         centres = np.asarray([c.centre for c in record.contacts], dtype=float).reshape(-1, 3)
         size = float(np.linalg.norm(np.ptp(centres, axis=0))) if len(centres) else 0.0
-        return budget, max(max_path * scale, 3.0 * size * budget)
+        sizes = current().explore.completion_path_sizes
+        return budget, max(max_path * scale, sizes * size * budget)
 
     def _spent(self, record: ExplorationRecord, model: ObjectModel) -> bool:
         """True when the completion's budget is spent (checked only with nothing open)."""

@@ -208,8 +208,15 @@ class ExploreSettings(_Group):
     completion_path: float = Field(
         4.0,
         ge=0,
-        description="Metres: the completion's path budget (or three times the touched extent "
-        "per touch of the budget, when that is more).",
+        description="Metres: the completion's path budget (or completion_path_sizes times the "
+        "touched extent per touch of the budget, when that is more).",
+    )
+    completion_path_sizes: float = Field(
+        4.0,
+        gt=0,
+        description="Touched extents: the completion's path budget per touch of its budget, when "
+        "more than completion_path (a probe goes round the object to its start and back, about "
+        "three extents, and one probe in four or so touches nothing).",
     )
     completion_attempts: int = Field(
         2,

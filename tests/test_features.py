@@ -746,3 +746,40 @@ def test_no_turn_steeper_than_the_tip_allows_is_measured() -> None:
     assert abs(turn) <= bound + 1e-9
     assert abs(turn) - 2.0 * sigma < 10.0
     assert not get_feature("surface_curved").fn(crowded)
+
+
+@pytest.mark.parametrize("tilt_deg", [3.0, 6.0])
+def test_a_pyramid_apex_split_by_a_face_turned_a_little_is_one_apex(tilt_deg: float) -> None:
+    # ground truth: a hexagonal pyramid lying on a lateral face, one of whose other lateral
+    # faces is known turned by a few degrees (touched only low, its sensors quantised): its
+    # plane misses the apex, which the polyhedron splits into two corners a few millimetres
+    # apart. Base, sides and apex are still the pyramid's.
+    mesh = solids.pyramid(6, 0.044, 0.061)
+    lying = next(  # not on its base: the base, the largest face, stands tilted
+        p for p in _rest_on_each_face(mesh) if p.face_normals[np.argmax(p.area_faces), 2] > -0.99
+    )
+    rec = sample_record(lying, FINGER, per_face=8, quantise=False, noise=0.0)
+    model = build_model(rec)
+    assert get_feature("lateral_edges_concurrent").fn(model)
+    face = next(
+        f for f in model.contact_faces if abs(f.normal_array[2]) < 0.5 and len(f.contacts) >= 3
+    )
+    n = face.normal_array
+    axis = np.cross(n, [0.0, 0.0, 1.0])
+    axis /= np.linalg.norm(axis)
+    centres = np.asarray([rec.contacts[i].centre for i in face.contacts])
+    middle = centres.mean(axis=0)
+    turn = trimesh.transformations.rotation_matrix(math.radians(tilt_deg), axis)[:3, :3]
+    for i in face.contacts:
+        c = np.asarray(rec.contacts[i].centre)
+        rec = _with_contact(
+            rec, i, turn @ np.asarray(rec.contacts[i].direction), middle + turn @ (c - middle)
+        )
+    tilted = build_model(rec)
+    poly = tilted.polyhedron
+    assert poly is not None and len(poly.faces) == 7
+    at_vertex = [sum(v in f for f in poly.faces) for v in range(len(poly.vertices))]
+    assert max(at_vertex) < 6  # the apex is split: no corner holds all six sides
+    assert get_feature("lateral_edges_concurrent").fn(tilted)
+    assert not get_feature("lateral_edges_parallel").fn(tilted)
+    assert side_count(tilted) == 6

@@ -70,6 +70,7 @@ from __future__ import annotations
 
 import inspect
 import math
+from collections import Counter
 from collections.abc import Callable, Hashable, Mapping
 from dataclasses import dataclass, field
 from importlib.metadata import entry_points
@@ -327,8 +328,11 @@ def _caps(model: ObjectModel, name: str, horizontal_deg: float) -> tuple[set[int
        at a vertex: a prism's or a frustum's ends); among several, those whose other edges
        are parallel (a prism's ends, not a lying trapezoidal prism's two parallel sides),
        and among those (a box) the pair holding the table face;
-    2. else an *apex*: a vertex where all faces but one meet (a pyramid's); the base is the
-       face not there (among several, a tetrahedron's, the table face);
+    2. else an *apex*: a vertex where all faces but one meet (a pyramid's), or a group of
+       corners joined by edges no longer than 2 × ``point_tol`` × the diameter (an apex split
+       by a face whose turn is known coarsely: lines that miss one point by the concurrency
+       tolerance can leave corners that far apart); the base is the face not there (among
+       several, a tetrahedron's, the table face);
     3. else the faces within ``horizontal_deg`` of −z (base) and +z (top).
 
     For an object resting on its base all three agree with the paper's "vertical" edges.
@@ -361,12 +365,44 @@ def _caps(model: ObjectModel, name: str, horizontal_deg: float) -> tuple[set[int
             return ({int(g)}, {int(f)}) if int(g) in base else ({int(f)}, {int(g)})
         if f_ >= 4:
             missing = [set(range(f_)) - set(fs) for fs in at if len(fs) == f_ - 1]
+            if not missing:
+                # an apex split by a face whose turn is known coarsely (touched at one spot
+                # or only low): its corners lie closer together than lines that miss one
+                # point by the concurrency tolerance may, so they count as one vertex
+                near = 2.0 * current().features.point_tol * p.diameter
+                missing = [
+                    set(range(f_)) - fs for fs in _near_corners(p, near) if len(fs) == f_ - 1
+                ]
             if missing:
                 b = next((m for m in missing if m & base), missing[0])
                 return {int(next(iter(b)))}, set()
         return base, top
 
     return _derived(model, (__name__, current().features, "caps", horizontal_deg), compute)
+
+
+def _near_corners(p: Polyhedron, distance: float) -> list[set[int]]:
+    """The faces meeting at each group of the polyhedron's vertices joined by edges no longer
+    than ``distance`` (groups of two or more vertices only)."""
+    parent = list(range(len(p.vertices)))
+
+    def root(i: int) -> int:
+        while parent[i] != i:
+            parent[i] = parent[parent[i]]
+            i = parent[i]
+        return i
+
+    for a, b in p.edges:
+        if float(np.linalg.norm(p.vertices[a] - p.vertices[b])) <= distance:
+            parent[root(int(a))] = root(int(b))
+    groups: dict[int, set[int]] = {}
+    sizes: Counter[int] = Counter(root(i) for i in range(len(p.vertices)))
+    for f, poly in enumerate(p.faces):
+        for v in poly:
+            r = root(int(v))
+            if sizes[r] > 1:
+                groups.setdefault(r, set()).add(f)
+    return list(groups.values())
 
 
 def _edges_parallel_apart_from(p: Polyhedron, cap: set[int]) -> bool:
