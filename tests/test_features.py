@@ -777,7 +777,8 @@ def test_a_pyramid_apex_split_by_a_face_turned_a_little_is_one_apex(tilt_deg: fl
         )
     tilted = build_model(rec)
     poly = tilted.polyhedron
-    assert poly is not None and len(poly.faces) == 7
+    assert poly is not None
+    assert len(poly.faces) == 7
     at_vertex = [sum(v in f for f in poly.faces) for v in range(len(poly.vertices))]
     assert max(at_vertex) < 6  # the apex is split: no corner holds all six sides
     assert get_feature("lateral_edges_concurrent").fn(tilted)
