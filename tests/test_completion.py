@@ -140,6 +140,14 @@ def test_the_budget_defaults_live_in_the_settings() -> None:
         assert CompletionParams().budget() == (0, 4.0, 2)
     with pytest.raises(Exception, match=r"explore\.completion_attempts"):
         settings.override(explore={"completion_attempts": 0})
+    # the path budget: completion_path metres, or completion_path_sizes touched extents a
+    # touch of the budget when more; a path budget far shorter than one probe ends it at once
+    with settings.override(explore={"completion_path": 0.0, "completion_path_sizes": 1e-6}):
+        short = explorer.explore(mesh, seed=0)
+    assert short.ending == "budget"
+    assert short.touches < spent.touches + 2
+    with pytest.raises(Exception, match=r"explore\.completion_path_sizes"):
+        settings.override(explore={"completion_path_sizes": 0})
 
 
 def test_what_the_finger_cannot_feel_is_named_unreachable() -> None:

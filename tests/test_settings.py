@@ -46,6 +46,7 @@ DOCUMENTED: dict[str, dict[str, float | str]] = {
         "top_nz": 0.8,
         "completion_touches": 24,
         "completion_path": 4.0,
+        "completion_path_sizes": 4.0,
         "completion_attempts": 2,
         "spot_rho": 2.0,
         "spot_deg": 2.0,
