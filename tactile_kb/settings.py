@@ -502,6 +502,25 @@ class FeatureSettings(_Group):
         "faces fit their planes better than a circle under noise); 0, the default: only "
         "circle_rho (at 1.25 a small octagonal prism under 0.5 mm noise fits a circle too).",
     )
+    circle_sigmas: float = Field(
+        1.5,
+        ge=0,
+        description="Standard deviations: every contact whose sensor is square to an axis, "
+        "whichever face the model made of it, lies on a curved surface when the tip centres "
+        "miss one circle by an RMS of at most this × the record's declared σ (or circle_rho), "
+        "their sensors take at least circle_faces readings about the axis, and at most "
+        "circle_off_fraction of them point off its centre by more than a third of the sensor "
+        "spacing.",
+    )
+    circle_off_fraction: float = Field(
+        0.25,
+        ge=0,
+        le=1,
+        description="Fraction: of the contacts around one axis (circle_sigmas), at most this "
+        "share may have a sensor further from the circle's centre than a third of the finger's "
+        "sensor spacing (a reading's quantisation): a prism's face keeps one sensor while its "
+        "tip centres go round the axis by the face's angle.",
+    )
     circle_arc_deg: float = Field(
         90.0,
         gt=0,

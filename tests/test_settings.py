@@ -92,6 +92,8 @@ DOCUMENTED: dict[str, dict[str, float | str]] = {
         "circle_faces": 5,
         "circle_rho": 0.05,
         "circle_ratio": 0.0,
+        "circle_sigmas": 1.5,
+        "circle_off_fraction": 0.25,
         "circle_arc_deg": 90.0,
         "rel_tol": 0.06,
         "edge_sigmas": 4.0,

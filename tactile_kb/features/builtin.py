@@ -623,6 +623,41 @@ def _circle_fit(pts: FloatArray) -> tuple[FloatArray, float, FloatArray]:
     return c, r, np.asarray(miss, dtype=float)
 
 
+def _off_axis(pts: FloatArray, d: FloatArray, rho: float, tol: float) -> FloatArray | None:
+    """Tip centres ``pts`` seen along an axis (2-D) and their sensors' directions ``d`` seen
+    along it: the angle (radians) of each sensor from the circle's centre, when the centres lie
+    on one circle of radius over 1.5 ρ (a sharp edge's centres lie at ρ) with an RMS miss
+    (n − 3 degrees of freedom) of at most ``tol``, round it by at least ``circle_arc_deg``
+    (a flat face's centres lie on a line, which fits a huge circle over a small arc); None
+    when they do not."""
+    s = current().features
+    if len(pts) < max(4, 2 * s.circle_faces):
+        return None
+    c, r, miss = _circle_fit(pts)
+    rms = math.sqrt(float((miss**2).sum()) / (len(miss) - 3))
+    if not (r > 1.5 * rho and rms <= tol):
+        return None
+    ang = np.sort(np.arctan2(pts[:, 1] - c[1], pts[:, 0] - c[0]))
+    gaps = np.diff(np.append(ang, ang[0] + 2.0 * math.pi))
+    if math.degrees(2.0 * math.pi - float(gaps.max())) < s.circle_arc_deg:
+        return None
+    inward = c - pts
+    cosang = (d * inward).sum(axis=1) / np.maximum(
+        np.linalg.norm(d, axis=1) * np.linalg.norm(inward, axis=1), 1e-12
+    )
+    return np.asarray(np.arccos(np.clip(cosang, -1.0, 1.0)), dtype=float)
+
+
+def _readings(d: FloatArray, quantum: float) -> int:
+    """How many distinct directions the 2-D directions ``d`` take about the axis: runs of
+    directions each within ``quantum`` (radians) of the next count as one."""
+    a = np.sort(np.arctan2(d[:, 1], d[:, 0]))
+    if len(a) == 0:
+        return 0
+    gaps = np.diff(np.append(a, a[0] + 2.0 * math.pi))
+    return max(1, int((gaps > quantum).sum()))
+
+
 def centres_on_circle(model: ObjectModel) -> bool:
     """Faces around one axis whose tip centres lie on one circle: a curved surface touched in
     narrow facets (a thin cylinder lying on its side, whose contour layers and probes each
@@ -653,7 +688,23 @@ def centres_on_circle(model: ObjectModel) -> bool:
       lie on a circle of radius ρ about it),
 
     and each contact's sensor points within the finger's median sensor spacing of the circle's
-    centre. Settings ``features.circle_*``.
+    centre.
+
+    Under noise the model often makes fewer than five facets of a lying cylinder (neighbouring
+    lines of contacts merge), and its faces fit their planes no better than a small prism's
+    faces fit a circle (an octagonal prism of radius 1.5 cm: within 1.1–1.3 σ).
+    So every contact whose sensor is square to a candidate axis also counts, whichever face
+    the model made of it: curved when their sensors take at least ``circle_faces`` readings
+    about the axis (directions more than a reading's quantisation apart: a third of the median
+    sensor spacing, within which the mean of two neighbouring sensors lies of a normal that
+    closes both), their centres miss one circle by an RMS of at most ``circle_sigmas`` × the
+    declared σ (or ``circle_rho`` ρ) over ``circle_arc_deg`` with a radius over 1.5 ρ, and
+    at most ``circle_off_fraction`` of their sensors point off its centre by more than a
+    reading's quantisation. On a cylinder the sensor that closes turns with the tip centre
+    round the axis; on a prism one face keeps one sensor while its centres go round the axis
+    by the face's angle (under 0.5 mm noise an octagonal prism of radius 1.5 cm leaves 42–53 %
+    of its sensors more than 10° off, a lying cylinder of radius 1 cm at most 17 %). Settings
+    ``features.circle_*``.
     """
 
     def compute() -> bool:
@@ -661,7 +712,7 @@ def centres_on_circle(model: ObjectModel) -> bool:
         record = model.record
         rho, sigma = record.tip_radius, record.noise
         faces = [f for f in model.contact_faces if f.contacts]
-        if len(faces) < s.circle_faces:
+        if len(faces) < 2:
             return False
         normals = np.asarray([f.normal for f in faces], dtype=float)
         centres = np.asarray([c.centre for c in record.contacts], dtype=float)
@@ -674,6 +725,9 @@ def centres_on_circle(model: ObjectModel) -> bool:
             spacing = float(np.median(np.arccos(np.clip(cos.max(axis=1), -1.0, 1.0))))
         else:
             spacing = math.radians(30.0)
+        # a reading's quantisation: two neighbouring sensors' mean lies within a third of
+        # their spacing of the normal that closes both (cones overlapping by a third)
+        quantum = spacing / 3.0
         square = math.sin(math.radians(s.horizontal_deg))
         tried: list[FloatArray] = []
         for i in range(len(faces)):
@@ -686,45 +740,39 @@ def centres_on_circle(model: ObjectModel) -> bool:
                 if any(abs(float(axis @ t)) > math.cos(math.radians(5.0)) for t in tried):
                     continue
                 tried.append(axis)
-                chain = [k for k in range(len(faces)) if abs(float(normals[k] @ axis)) < square]
-                if len(chain) < s.circle_faces:
-                    continue
-                idx = sorted({c for k in chain for c in faces[k].contacts})
                 e1 = np.cross(axis, [1.0, 0.0, 0.0])
                 if float(np.linalg.norm(e1)) < 0.5:
                     e1 = np.cross(axis, [0.0, 1.0, 0.0])
                 e1 = e1 / float(np.linalg.norm(e1))
-                e2 = np.cross(axis, e1)
-                basis = np.column_stack([e1, e2])
-                pts = centres[idx] @ basis
-                if len(pts) < 2 * s.circle_faces:
+                basis = np.column_stack([e1, np.cross(axis, e1)])
+                chain = [k for k in range(len(faces)) if abs(float(normals[k] @ axis)) < square]
+                if len(chain) >= s.circle_faces:
+                    idx = sorted({c for k in chain for c in faces[k].contacts})
+                    # the faces' own scatter about their planes (pooled over the refined
+                    # ones; the declared noise when they have too few degrees of freedom)
+                    dof = sum(len(faces[k].contacts) - 3 for k in chain if faces[k].refined)
+                    sse = sum(
+                        len(faces[k].contacts) * faces[k].residual ** 2
+                        for k in chain
+                        if faces[k].refined
+                    )
+                    scatter = math.sqrt(sse / dof) if dof >= 3 else sigma
+                    tol = max(s.circle_rho * rho, s.circle_ratio * scatter)
+                    off = _off_axis(centres[idx] @ basis, directions[idx] @ basis, rho, tol)
+                    if off is not None and float(off.max()) <= spacing:
+                        return True
+                # every contact whose sensor is square to the axis, whichever face the
+                # model made of it: at least circle_faces readings apart, and few sensors
+                # off the axis by more than a reading's quantisation
+                sel = np.flatnonzero(np.abs(directions @ axis) < square)
+                if len(sel) < 2 * s.circle_faces:
                     continue
-                c, r, miss = _circle_fit(pts)
-                # the faces' own scatter about their planes (pooled over the refined ones;
-                # the declared noise when they have too few degrees of freedom)
-                dof = sum(len(faces[k].contacts) - 3 for k in chain if faces[k].refined)
-                sse = sum(
-                    len(faces[k].contacts) * faces[k].residual ** 2
-                    for k in chain
-                    if faces[k].refined
-                )
-                scatter = math.sqrt(sse / dof) if dof >= 3 else sigma
-                tol = max(s.circle_rho * rho, s.circle_ratio * scatter)
-                rms = math.sqrt(float((miss**2).sum()) / (len(miss) - 3))
-                if not (r > 1.5 * rho and rms <= tol):
+                d = directions[sel] @ basis
+                if _readings(d, quantum) < s.circle_faces:
                     continue
-                ang = np.sort(np.arctan2(pts[:, 1] - c[1], pts[:, 0] - c[0]))
-                gaps = np.diff(np.append(ang, ang[0] + 2.0 * math.pi))
-                if math.degrees(2.0 * math.pi - float(gaps.max())) < s.circle_arc_deg:
-                    continue
-                # each sensor points at the axis: the contact direction, seen along the
-                # axis, against the direction from the centre to the circle's middle
-                d = directions[idx] @ basis
-                inward = c - pts
-                cosang = (d * inward).sum(axis=1) / np.maximum(
-                    np.linalg.norm(d, axis=1) * np.linalg.norm(inward, axis=1), 1e-12
-                )
-                if float(np.arccos(np.clip(cosang, -1.0, 1.0)).max()) <= spacing:
+                tol = max(s.circle_rho * rho, s.circle_sigmas * sigma)
+                off = _off_axis(centres[sel] @ basis, d, rho, tol)
+                if off is not None and float((off > quantum).mean()) <= s.circle_off_fraction:
                     return True
         return False
 
