@@ -674,8 +674,8 @@ def _beyond_unexplained_edges(model: ObjectModel) -> set[int]:
 
 
 def _past_the_hint(model: ObjectModel) -> set[int]:
-    """The model's corners outside the visual hint box (``hint_lo_*``, ``hint_hi_*`` in
-    ``record.params``: the object's visual extent, grown by the tip) by more than 2 ρ + 3 σ.
+    """The model's corners further than 2 ρ + 3 σ from the visual hint box (``hint_lo_*``,
+    ``hint_hi_*`` in ``record.params``: the object's visual extent, grown by the tip).
 
     The object lies inside its hint: a corner that far outside it is where the planes of
     touched faces run on past a face nobody touched (a lying frustum's small end, its sides
@@ -690,8 +690,9 @@ def _past_the_hint(model: ObjectModel) -> set[int]:
     hi = np.array([params[k] for k in keys[3:]])
     margin = 2.0 * model.record.tip_radius + 3.0 * model.record.noise
     verts = np.asarray(poly.vertices, dtype=float)
-    out = ((lo - margin > verts) | (verts > hi + margin)).any(axis=1)
-    return {int(i) for i in np.flatnonzero(out)}
+    # the distance from the box (a corner past a box's corner lies out along two axes)
+    outside = np.linalg.norm(np.maximum(lo - verts, 0.0) + np.maximum(verts - hi, 0.0), axis=1)
+    return {int(i) for i in np.flatnonzero(outside > margin)}
 
 
 def _table_corner_probes(
