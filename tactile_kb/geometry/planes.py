@@ -958,9 +958,7 @@ def _faces_from_contacts(
     groups: list[NDArray[np.intp]] = []
     for lab in np.unique(labels):
         groups += _split(keep[labels == lab], centres, normals, span_min, tol, fit, 0, scale, reach)
-    groups = _merge_coplanar(
-        groups, fit, tol, merge_deg, merge_cone, centres, scale, normals
-    )
+    groups = _merge_coplanar(groups, fit, tol, merge_deg, merge_cone, centres, scale, normals)
     groups.sort(key=lambda g: int(g.min()))
     index = (
         np.arange(chosen.start, chosen.stop, chosen.step)
@@ -1102,7 +1100,9 @@ def _merge_coplanar(
         # a group spans its plane firmly when its centres fit one and are enough to show the
         # surface's scatter; a few centres (a probe's touch and its short slide, two such
         # rows) fit a plane that tilts by degrees under noise or relief, as loosely as a line
-        refined = np.asarray([f.refined and len(g) >= WEAK_SPAN for f, g in zip(fits, groups)])
+        refined = np.asarray(
+            [f.refined and len(g) >= WEAK_SPAN for f, g in zip(fits, groups, strict=True)]
+        )
         cos = normals @ normals.T
         # candidate pairs (i < j, row by row) from one matrix product, each confirmed below
         unspanned = ~(refined[:, None] & refined[None, :])
