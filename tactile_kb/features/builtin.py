@@ -150,11 +150,6 @@ EDGE_SIGMAS = DEFAULTS.features.edge_sigmas
 lengths exceeds 4·√2·σ with a probability below 1 %."""
 POINT_TOL = DEFAULTS.features.point_tol
 HORIZONTAL_DEG = DEFAULTS.features.horizontal_deg
-BEND_GAP = 0.5
-"""A face's tip centres measure its turn along a direction only when no gap between them
-along it exceeds this fraction of their extent (:func:`spread_bend`): two clusters at its ends
-show only their own few millimetres of bend."""
-
 RELIEF_DOF = 4.0
 """Degrees of freedom the assumed relief (``geometry.relief_rho``) is worth when it is pooled
 with the scatter a face's tip centres show about their bent fit (:func:`spread_bend`)."""
@@ -855,11 +850,6 @@ def _bend(model: ObjectModel, face: int, anywhere: bool) -> tuple[float, float, 
     u, v, h = c @ u_dir, c @ v_dir, c @ n
     width = float(np.ptp(u))
     if width <= 0:
-        return 0.0, math.inf, math.inf
-    if float(np.diff(np.sort(u)).max()) > BEND_GAP * width:
-        # the centres lie in two clusters along u (a top touched along two lines across
-        # it): the bend rests on each cluster's own few millimetres, where a bump's flank
-        # bends as much, extrapolated over the gap; the centres cannot tell
         return 0.0, math.inf, math.inf
     us, vs = u / width, v / width  # well-conditioned unknowns
     plane = np.column_stack([np.ones_like(us), us, vs])
