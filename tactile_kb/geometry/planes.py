@@ -82,7 +82,6 @@ __all__ = [
     "NARROW_SPAN_SCALES",
     "OUTSIDE_SIGMAS",
     "SMOOTH_RHO",
-    "SMOOTH_SE",
     "TABLE_TOL",
     "WEAK_SPAN",
     "Face",
@@ -1381,12 +1380,6 @@ SMOOTH_RHO = 0.01
 :func:`explained_faces` explains none of its faces away: an ideal solid's narrow faces and
 edge touches are left to :func:`edge_faces`."""
 
-SMOOTH_SE = 2.0
-"""With declared noise, the faces' scatter (with their planes' degrees of freedom given back)
-shows detail only when it exceeds the noise by this many standard errors of a scatter
-estimated from that many degrees of freedom (:func:`explained_faces`): an ideal solid
-touched with noise measures the noise itself, give or take that error."""
-
 
 def explained_faces(
     faces: Sequence[Face],
@@ -1477,19 +1470,10 @@ def explained_faces(
     # the surface's detail as the faces measure it: the median scatter of the tip centres of
     # the faces that span a plane about it (a scan's noise lifts a tip by a few times that)
     # (beyond the declared noise, which the slack below covers)
-    # (each face's RMS over its m centres, with the three degrees of freedom its plane took
-    # given back: an RMS over m reads a surface of 0.5 mm noise and 0.2 mm of detail as
-    # smoother than the noise alone)
-    rows = [f for f in faces if f.refined and f.n_contacts >= 6]
-    scatter = [f.residual * math.sqrt(f.n_contacts / (f.n_contacts - 3)) for f in rows]
+    scatter = [f.residual for f in faces if f.refined and f.n_contacts >= 6]
     rough = float(np.median(scatter)) if scatter else 0.0
     excess = math.sqrt(max(rough * rough - noise * noise, 0.0))
-    # a scatter estimated from d degrees of freedom is the noise's own within about
-    # 1/√(2d) of it: detail shows only beyond SMOOTH_SE such errors
-    dof = sum(f.n_contacts - 3 for f in rows)
-    if excess <= SMOOTH_RHO * rho or (
-        noise > 0 and rough <= noise * (1.0 + SMOOTH_SE / math.sqrt(2.0 * max(dof, 1)))
-    ):
+    if excess <= SMOOTH_RHO * rho:
         return removed  # a surface with no detail beyond the noise: no rounding, no relief
     detail = DETAIL_SIGMAS * excess
     while True:
