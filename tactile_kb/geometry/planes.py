@@ -1084,7 +1084,12 @@ def _merge_coplanar(
     the other group's centres lie on it within ``geometry.unrefined_merge_sigmas`` × the
     spanning group's scatter (at least ``scale``, the robust fits' least scale), by their
     median: they are on one face, and their sensors' tilt is the quantisation or the
-    surface's detail, not another face."""
+    surface's detail, not another face. A group of fewer than :data:`WEAK_SPAN` centres that
+    spans a plane merges as such a line does (its own plane tilts by degrees under noise).
+    Neither merges where its centres lie past the spanning group's touched extent in the
+    direction its sensors tilt (:func:`_beyond`: a fold may begin there), unless ``sensor_normals``
+    (each contact's sensor normal) put their mean within :data:`FOLD_CONES` × ``cone`` of the
+    spanning group's normal: a face turned between two sensors fires either."""
     cos_min = math.cos(math.radians(merge_deg))
     loose = max(merge_deg, current().geometry.unrefined_merge_cones * cone)
     if centres is None:
