@@ -73,7 +73,6 @@ __all__ = [
     "EDGE_ROUNDING",
     "EDGE_SIGMAS",
     "EDGE_SPOTS",
-    "FOLD_CONES",
     "FOLD_RATIO",
     "INSIDE_SIGMAS",
     "MAX_REJECTED",
@@ -83,7 +82,6 @@ __all__ = [
     "OUTSIDE_SIGMAS",
     "SMOOTH_RHO",
     "TABLE_TOL",
-    "WEAK_SPAN",
     "Face",
     "contact_arrays",
     "cut_angle",
@@ -957,7 +955,7 @@ def _faces_from_contacts(
     groups: list[NDArray[np.intp]] = []
     for lab in np.unique(labels):
         groups += _split(keep[labels == lab], centres, normals, span_min, tol, fit, 0, scale, reach)
-    groups = _merge_coplanar(groups, fit, tol, merge_deg, merge_cone, centres, scale, normals)
+    groups = _merge_coplanar(groups, fit, tol, merge_deg, merge_cone, centres, scale)
     groups.sort(key=lambda g: int(g.min()))
     index = (
         np.arange(chosen.start, chosen.stop, chosen.step)
@@ -1051,18 +1049,6 @@ def _finger(directions: tuple[Vec3, ...]) -> tuple[FloatArray, float, float]:
     return sensors, cut, cone
 
 
-FOLD_CONES = 1.5
-"""Quantisation cones: a line whose sensors' normal lies within this many cones of a face's
-normal may lie past the face's touched extent and still merge with it (a face turned between
-two sensors fires either, and a bump at its end decides which: :func:`_merge_coplanar`);
-further off, a fold may begin there (:func:`_beyond`)."""
-
-WEAK_SPAN = 6
-"""A group of fewer tip centres than this that spans a plane merges with a face that spans
-one firmly as loosely as a line does (:func:`_merge_coplanar`): five centres in two short rows
-(two probes' touches and slides) fit a plane that tilts by degrees under 0.5 mm of noise."""
-
-
 def _merge_coplanar(
     groups: list[NDArray[np.intp]],
     fit: FitFn,
@@ -1071,7 +1057,6 @@ def _merge_coplanar(
     cone: float = 0.0,
     centres: FloatArray | None = None,
     scale: float = 0.0,
-    sensor_normals: FloatArray | None = None,
 ) -> list[NDArray[np.intp]]:
     """Merge groups whose fitted planes coincide (normals within ``merge_deg``, one plane fits).
 
@@ -1084,29 +1069,18 @@ def _merge_coplanar(
     the other group's centres lie on it within ``geometry.unrefined_merge_sigmas`` × the
     spanning group's scatter (at least ``scale``, the robust fits' least scale), by their
     median: they are on one face, and their sensors' tilt is the quantisation or the
-    surface's detail, not another face. A group of fewer than :data:`WEAK_SPAN` centres that
-    spans a plane merges as such a line does (its own plane tilts by degrees under noise).
-    Neither merges where its centres lie past the spanning group's touched extent in the
-    direction its sensors tilt (:func:`_beyond`: a fold may begin there), unless ``sensor_normals``
-    (each contact's sensor normal) put their mean within :data:`FOLD_CONES` × ``cone`` of the
-    spanning group's normal: a face turned between two sensors fires either."""
+    surface's detail, not another face."""
     cos_min = math.cos(math.radians(merge_deg))
     loose = max(merge_deg, current().geometry.unrefined_merge_cones * cone)
     if centres is None:
         loose = merge_deg
     cos_loose = math.cos(math.radians(loose))
-    cos_fold = math.cos(math.radians(FOLD_CONES * cone)) if cone > 0 else 1.0
     changed = True
     while changed and len(groups) > 1:
         changed = False
         fits = [fit(g) for g in groups]
         normals = np.asarray([f.normal for f in fits])
-        # a group spans its plane firmly when its centres fit one and are enough to show the
-        # surface's scatter; a few centres (a probe's touch and its short slide, two such
-        # rows) fit a plane that tilts by degrees under noise or relief, as loosely as a line
-        refined = np.asarray(
-            [f.refined and len(g) >= WEAK_SPAN for f, g in zip(fits, groups, strict=True)]
-        )
+        refined = np.asarray([f.refined for f in fits])
         cos = normals @ normals.T
         # candidate pairs (i < j, row by row) from one matrix product, each confirmed below
         unspanned = ~(refined[:, None] & refined[None, :])
@@ -1122,24 +1096,16 @@ def _merge_coplanar(
             if fits[i].normal @ fits[j].normal < cos_min:
                 if not joint.refined or centres is None:
                     continue
-                spanning = [fits[k] for k in (i, j) if refined[k]]
-                line = groups[j] if refined[i] else groups[i]
+                spanning = [fits[k] for k in (i, j) if fits[k].refined]
+                line = groups[j] if fits[i].refined else groups[i]
                 if spanning:  # the plane is the spanning group's
                     if joint.normal @ spanning[0].normal < cos_min:
                         continue
-                    # the sensors' normal of the line (a few centres' own plane tilts with
-                    # their noise); a fold begins past the face's touched extent only where
-                    # no sensor facing the face could have fired: the line's sensors lie
-                    # further than a sensor spacing (two cones) from the face's normal
-                    tilted = fits[j if refined[i] else i].normal
-                    if sensor_normals is not None:
-                        tilted = sensor_normals[line].mean(axis=0)
-                        tilted = tilted / float(np.linalg.norm(tilted))
-                    if float(tilted @ spanning[0].normal) < cos_fold and _beyond(
+                    if _beyond(
                         centres,
                         line,
-                        groups[i] if refined[i] else groups[j],
-                        tilted,
+                        groups[i] if fits[i].refined else groups[j],
+                        fits[j if fits[i].refined else i].normal,
                         spanning[0].normal,
                         tol,
                     ):
