@@ -216,7 +216,7 @@ class ExploreSettings(_Group):
         gt=0,
         description="Touched extents: the completion's path budget per touch of its budget, when "
         "more than completion_path (a probe goes round the object to its start and back, about "
-        "three extents, and one probe in four or so touches nothing).",
+        "three extents, and some probes touch nothing).",
     )
     completion_attempts: int = Field(
         2,
