@@ -19,9 +19,9 @@ The true labels come from the construction (bench_accuracy's builders), never
 from the code under test: a pose changes where an object lies, not what it is.
 
 ``--explorer mujoco`` runs the same instances (the same seeds draw the same objects, poses and
-turns) in the MuJoCo plugin's world; ``--set`` runs every case under changed settings (as the
-command line's ``--set``), to measure a setting on the same cases; ``--shaft RADIUS`` gives the 33-sensor finger a colliding
-stem of that radius (metres), in either world. With MuJoCo the last column is the share of the
+turns) in the MuJoCo plugin's world; ``--shaft RADIUS`` gives the 33-sensor finger a colliding
+stem of that radius (metres), in either world; ``--set`` runs every case under changed settings
+(as the command line's ``--set``), to measure a setting on the same cases. With MuJoCo the last column is the share of the
 wall time spent simulating the head's turns.
 """
 
@@ -43,6 +43,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 from bench_accuracy import FAMILIES, NOISE, Family, faces_to_touch
 
 from tactile_kb import settings, solids
+from tactile_kb.errors import UsageError
 from tactile_kb.pipeline import classify
 from tactile_kb.touch.finger import builtin_finger
 from tactile_kb.touch.stepper import StepperExplorer, StepperWorld
@@ -213,7 +214,7 @@ def main() -> None:
         ap.error("--exact-only and --noisy-only exclude each other")
     try:
         settings.DEFAULTS.assigned(args.set)
-    except Exception as exc:  # a usage error, located to the argument
+    except UsageError as exc:  # located to the argument
         ap.error(str(exc))
     print(f"explorer {args.explorer}, finger 33, stem radius {args.shaft or 'none'}")
     families = [f for f in ALL if not args.family or f.name in args.family]

@@ -637,8 +637,7 @@ def _off_axis(pts: FloatArray, d: FloatArray, rho: float, tol: float) -> FloatAr
     rms = math.sqrt(float((miss**2).sum()) / (len(miss) - 3))
     if not (r > 1.5 * rho and rms <= tol):
         return None
-    ang = np.sort(np.arctan2(pts[:, 1] - c[1], pts[:, 0] - c[0]))
-    gaps = np.diff(np.append(ang, ang[0] + 2.0 * math.pi))
+    gaps = _turn_gaps(pts - c)
     if math.degrees(2.0 * math.pi - float(gaps.max())) < s.circle_arc_deg:
         return None
     inward = c - pts
@@ -651,11 +650,16 @@ def _off_axis(pts: FloatArray, d: FloatArray, rho: float, tol: float) -> FloatAr
 def _readings(d: FloatArray, quantum: float) -> int:
     """How many distinct directions the 2-D directions ``d`` take about the axis: runs of
     directions each within ``quantum`` (radians) of the next count as one."""
-    a = np.sort(np.arctan2(d[:, 1], d[:, 0]))
-    if len(a) == 0:
+    if len(d) == 0:
         return 0
-    gaps = np.diff(np.append(a, a[0] + 2.0 * math.pi))
-    return max(1, int((gaps > quantum).sum()))
+    return max(1, int((_turn_gaps(d) > quantum).sum()))
+
+
+def _turn_gaps(v: FloatArray) -> FloatArray:
+    """The angles (radians) between successive 2-D directions ``v`` in turn order, the last
+    to the first round the full turn included."""
+    a = np.sort(np.arctan2(v[:, 1], v[:, 0]))
+    return np.asarray(np.diff(np.append(a, a[0] + 2.0 * math.pi)), dtype=float)
 
 
 def centres_on_circle(model: ObjectModel) -> bool:
