@@ -53,6 +53,7 @@ from tactile_kb.geometry.planes import (
     explained_faces,
     merge_plane_arrays,
     nearest_points,
+    refit_past_roundings,
 )
 from tactile_kb.geometry.polyhedron import (
     Polyhedron,
@@ -197,8 +198,11 @@ def build_model(
     edge_rounding
         Faces made of touches of the other faces' (sharp or rounded) edges are dropped
         (:func:`tactile_kb.geometry.planes.edge_faces` with this ``rounding``); their contacts are
-        listed in ``options["edge_contacts"]``. None keeps every face; ``"settings"``: the
-        settings' ``geometry.edge_rounding``.
+        listed in ``options["edge_contacts"]``, and so are faces the others explain
+        (:func:`tactile_kb.geometry.planes.explained_faces`); then each face whose touches
+        that rolled onto a rounded edge beside it turn its plane is refitted without them
+        (:func:`tactile_kb.geometry.planes.refit_past_roundings`). None keeps every face as
+        fitted; ``"settings"``: the settings' ``geometry.edge_rounding``.
 
     Returns
     -------
@@ -247,6 +251,15 @@ def build_model(
                 sorted((*edge_contacts, *(i for k in drop for i in faces[k].contacts)))
             )
             faces = tuple(f for k, f in enumerate(faces) if k not in drop)
+            points, normals, offsets, supporting = _support(
+                arrays[0], record.tip_radius, faces, tol
+            )
+    if edge_rounding is not None and len(faces) >= 5:
+        refitted = refit_past_roundings(
+            faces, supporting, arrays, record.tip_radius, noise=noise, rounding=edge_rounding
+        )
+        if refitted != faces:
+            faces = refitted
             points, normals, offsets, supporting = _support(
                 arrays[0], record.tip_radius, faces, tol
             )

@@ -58,7 +58,7 @@ from numpy.typing import NDArray
 from scipy.cluster.hierarchy import fcluster, linkage
 
 from tactile_kb.errors import GeometryError, UsageError
-from tactile_kb.geometry.polyhedron import face_width, polyhedron_from_planes
+from tactile_kb.geometry.polyhedron import Polyhedron, face_width, polyhedron_from_planes
 from tactile_kb.record import Contact, ExplorationRecord
 from tactile_kb.settings import DEFAULTS, current
 from tactile_kb.types import FloatArray, Vec3
@@ -75,6 +75,7 @@ __all__ = [
     "EDGE_SPOTS",
     "FOLD_RATIO",
     "INSIDE_SIGMAS",
+    "LOPSIDED",
     "MAX_REJECTED",
     "NARROW_MIN",
     "NARROW_SCALES",
@@ -91,6 +92,8 @@ __all__ = [
     "merge_plane_arrays",
     "merge_planes",
     "nearest_points",
+    "refit_past_roundings",
+    "rounding_zone",
 ]
 
 
@@ -1049,6 +1052,12 @@ def _finger(directions: tuple[Vec3, ...]) -> tuple[FloatArray, float, float]:
     return sensors, cut, cone
 
 
+LOPSIDED = 4.0
+"""Two faces that both span a plane, one touched at least this many times as often as the
+other, merge within the loose angle of :func:`_merge_coplanar` when every centre of the
+smaller lies on the larger one's plane within its scatter."""
+
+
 def _merge_coplanar(
     groups: list[NDArray[np.intp]],
     fit: FitFn,
@@ -1069,7 +1078,12 @@ def _merge_coplanar(
     the other group's centres lie on it within ``geometry.unrefined_merge_sigmas`` × the
     spanning group's scatter (at least ``scale``, the robust fits' least scale), by their
     median: they are on one face, and their sensors' tilt is the quantisation or the
-    surface's detail, not another face."""
+    surface's detail, not another face. Two groups that both span a plane, one with at least
+    :data:`LOPSIDED` times the other's centres, merge within the same loose angle when the
+    plane of both is the larger one's (within ``merge_deg``) and *every* centre of the smaller
+    lies on the larger one's plane within ``geometry.unrefined_merge_sigmas`` × its scatter
+    (at least ``scale``): a few touches over a short spread fit a plane turned by the noise
+    or a rounding's dips, but they lie on the face."""
     cos_min = math.cos(math.radians(merge_deg))
     loose = max(merge_deg, current().geometry.unrefined_merge_cones * cone)
     if centres is None:
@@ -1084,7 +1098,17 @@ def _merge_coplanar(
         cos = normals @ normals.T
         # candidate pairs (i < j, row by row) from one matrix product, each confirmed below
         unspanned = ~(refined[:, None] & refined[None, :])
-        near = np.triu((cos >= cos_min - 1e-9) | (unspanned & (cos >= cos_loose - 1e-9)), 1)
+        sizes = np.asarray([len(g) for g in groups])
+        # a face touched a few times beside one touched far more often: its few centres can
+        # fit a plane turned by several degrees (noise, a rounding's dips at its lines' ends)
+        lopsided = np.maximum(sizes[:, None], sizes[None, :]) >= LOPSIDED * np.minimum(
+            sizes[:, None], sizes[None, :]
+        )
+        near = np.triu(
+            (cos >= cos_min - 1e-9)
+            | ((unspanned | (lopsided & (centres is not None))) & (cos >= cos_loose - 1e-9)),
+            1,
+        )
         pairs = list(zip(*np.nonzero(near), strict=True))
         # a line joins a face that spans a plane before two lines join each other
         pairs.sort(key=lambda ij: 2 - int(refined[ij[0]]) - int(refined[ij[1]]))
@@ -1098,7 +1122,17 @@ def _merge_coplanar(
                     continue
                 spanning = [fits[k] for k in (i, j) if fits[k].refined]
                 line = groups[j] if fits[i].refined else groups[i]
-                if spanning:  # the plane is the spanning group's
+                if len(spanning) == 2:  # the plane is the far larger group's
+                    big, small = (i, j) if len(groups[i]) >= len(groups[j]) else (j, i)
+                    if joint.normal @ fits[big].normal < cos_min:
+                        continue
+                    scatter = max(scale, _mad_sigma(fits[big].residuals))
+                    off = np.abs(
+                        centres[groups[small]] @ fits[big].normal - fits[big].centre_offset
+                    )
+                    if float(off.max()) > current().geometry.unrefined_merge_sigmas * scatter:
+                        continue
+                elif spanning:  # the plane is the spanning group's
                     if joint.normal @ spanning[0].normal < cos_min:
                         continue
                     if _beyond(
@@ -1117,11 +1151,12 @@ def _merge_coplanar(
                     ):
                         continue
                     scatter, line = scale, both
-                # the other group's centres on that plane, as close as a face's own lie to it
-                # (their median: a bump under one of them is the surface's detail)
-                off = np.abs(centres[line] @ joint.normal - joint.centre_offset)
-                if float(np.median(off)) > current().geometry.unrefined_merge_sigmas * scatter:
-                    continue
+                if len(spanning) < 2:
+                    # the other group's centres on that plane, as close as a face's own lie to
+                    # it (their median: a bump under one of them is the surface's detail)
+                    off = np.abs(centres[line] @ joint.normal - joint.centre_offset)
+                    if float(np.median(off)) > current().geometry.unrefined_merge_sigmas * scatter:
+                        continue
             groups = [g for k, g in enumerate(groups) if k not in (i, j)] + [both]
             changed = True
             break
@@ -1503,3 +1538,207 @@ def explained_faces(
             return sorted(removed)
         kept.remove(best)
         removed.append(best)
+
+
+def refit_past_roundings(
+    faces: Sequence[Face],
+    supporting: Sequence[bool],
+    arrays: tuple[FloatArray, FloatArray, FloatArray],
+    rho: float,
+    *,
+    noise: float = 0.0,
+    rounding: float | None = None,
+    min_contacts: int = 5,
+) -> tuple[Face, ...]:
+    """The faces, each refitted without the tip centres that touched a rounded edge beside it
+    when those centres tilt its plane.
+
+    A contour line that runs up to a rounded edge ends with touches on the rounding: the tip
+    rolls over it and its centre dips inside the face's plane by up to about ``ρ + r`` times
+    ``1 − cos`` of the turn, a millimetre or more, while the sensor that fires is still the
+    face's. Such dips at the ends of a face's short lines fit a plane turned by several
+    degrees about as well as the face itself does (an octahedron's side touched along two
+    lines of 16 and 4 mm whose last touches lie 1 mm inside: 4.4° off), and the robust fit
+    (:func:`_robust_plane`) keeps them when they are more than a quarter of the centres.
+
+    The centres that may lie on a rounding are found on the polyhedron ``P`` of the
+    supporting faces (:func:`rounding_zone`, with ``rounding``); :func:`_past_rounding` sets
+    aside those of them that dip inside the plane the face's other centres share, and the
+    face is refitted without them when that plane is the face's and the dips turned the
+    plane of all its centres beyond what the noise does. On a sharp edge the centres near it
+    lie on the plane, nothing dips, and nothing changes. The refitted face keeps all its
+    contacts (they were touched there); its residual and uncertainties are the kept centres'
+    (σ at least the declared noise).
+
+    Parameters
+    ----------
+    faces, supporting
+        As for :func:`explained_faces`.
+    arrays
+        ``(centres, directions, points)`` of the record's contacts (:func:`contact_arrays`).
+    rho
+        The tip radius.
+    noise
+        σ of the contact positions (m).
+    rounding
+        ``geometry.edge_rounding`` by default.
+    min_contacts
+        Faces with fewer contacts are left as they are.
+    """
+    geo = current().geometry
+    if rounding is None:
+        rounding = geo.edge_rounding
+    centres, directions, _ = arrays
+    which = [k for k, s in enumerate(supporting) if s]
+    if len(which) < 4 or rounding <= 0:
+        return tuple(faces)
+    normals = np.asarray([faces[k].normal for k in which], dtype=float).reshape(-1, 3)
+    offsets = np.asarray([faces[k].offset for k in which], dtype=float)
+    pts = centres[[i for f in faces for i in f.contacts]] if len(centres) else centres
+    if len(pts) < 4:
+        return tuple(faces)
+    middle = pts.mean(axis=0)
+    bound = (middle, 3.0 * float(np.linalg.norm(pts - middle, axis=1).max()))
+    try:
+        poly = polyhedron_from_planes(normals, offsets, bound=bound)
+    except GeometryError:
+        return tuple(faces)
+    plane_of = {which[int(j)]: p for p, j in enumerate(poly.plane_index)}
+    scale = max(noise, geo.robust_rho * rho)
+    sensors = -directions / np.linalg.norm(directions, axis=1)[:, None]
+    out = list(faces)
+    for k in which:
+        f = faces[k]
+        m = len(f.contacts)
+        if f.source != "contacts" or not f.refined or m < min_contacts or k not in plane_of:
+            continue
+        idx = np.asarray(f.contacts, dtype=np.intp)
+        zone = rounding_zone(centres[idx], poly, plane_of[k], rho, rounding)
+        if not zone.any():
+            continue
+        fit = _past_rounding(centres[idx], sensors[idx], zone, max(3, (m + 1) // 2), scale)
+        if fit is not None:
+            out[k] = _refitted(f, fit, rho, noise)
+    return tuple(out)
+
+
+def rounding_zone(
+    centres: FloatArray, poly: Polyhedron, face: int, rho: float, rounding: float
+) -> NDArray[np.bool_]:
+    """Which tip ``centres`` touching face ``face`` of ``poly`` may lie on the rounding of one
+    of its edges: those whose *edge radius* is at most ``rounding`` × the narrower face's
+    width. The edge radius is the least radius ``r`` of a rounding of the edge with another
+    face ``B`` (normals β apart, at most 120°) that puts a tip there, ``(ρ·cos β − h_B) /
+    (1 − cos β)`` for the centre's height ``h_B`` above ``B``'s plane: a tip on a rounding
+    lies at ``ρ + r`` from its axis, ``r`` inside both planes (:func:`_rounded_edge_planes`
+    turned round)."""
+    cos_b = poly.normals @ poly.normals[face]
+    others = np.flatnonzero((cos_b < 1.0 - 1e-9) & (cos_b > -0.5))
+    if len(others) == 0 or len(centres) == 0:
+        return np.zeros(len(centres), dtype=bool)
+    widths = np.asarray([face_width(poly, f) for f in others.tolist()])
+    over = centres @ poly.normals[others].T - poly.offsets[others]
+    need = (rho * cos_b[others] - over) / (1.0 - cos_b[others])
+    cap = rounding * np.minimum(widths, face_width(poly, face))
+    return np.asarray((need <= cap).any(axis=1))
+
+
+def _past_rounding(
+    centres: FloatArray, sensors: FloatArray, zone: NDArray[np.bool_], least: int, scale: float
+) -> _Fit | None:
+    """The plane of a face's ``centres`` without those in ``zone`` (near enough to an edge to
+    lie on its rounding) that dip inside it, or None when no such set explains a dip
+    (:func:`refit_past_roundings`); at least ``least`` centres are kept. A set set aside
+    explains a dip when the rest lie on their plane within 4 ``s`` (``s`` the larger of
+    ``scale`` and their robust scatter), none of the set lies outside it by more than 4 ``s``
+    and one lies inside by more; and only when the plane of all the centres misses the kept
+    ones by an RMS above ``scale`` (the noise, at least) and above twice their scatter about
+    their own plane (σ with three degrees of freedom spent; so four centres at least): the
+    dips turned it, which the noise alone does not.
+
+    The whole zone is set aside first, and those of its centres that lie on the plane of the
+    rest are given back; when that leaves too few, the zone's deepest centre (below the plane
+    of those kept) is set aside one at a time, and once the rest share a plane, any of the
+    zone's still more than 2 ``s`` inside it too."""
+    span = current().geometry.span
+    m = len(centres)
+    whole = _fit(centres, sensors, span)
+
+    def explains(keep: NDArray[np.bool_]) -> tuple[_Fit, float] | None:
+        if keep.all():
+            return None
+        fit = _fit(centres[keep], sensors[keep], span)
+        if not fit.refined:
+            return None
+        s = max(scale, _mad_sigma(fit.residuals))
+        dips = centres[~keep] @ fit.normal - fit.centre_offset
+        # the plane of them all misses the kept centres, by more than the noise and at least
+        # twice as far as their own plane: the dips turned it
+        missed = centres[keep] @ whole.normal - whole.centre_offset
+        n = int(keep.sum())
+        own = math.sqrt(_sse(fit) / (n - 3)) if n > 3 else math.inf
+        turned = _rms(missed) > max(scale, 2.0 * own)
+        ok = (
+            turned
+            and float(np.abs(fit.residuals).max()) <= INSIDE_SIGMAS * s
+            and float(dips.max()) <= INSIDE_SIGMAS * s
+            and float(dips.min()) < -INSIDE_SIGMAS * s
+        )
+        return (fit, s) if ok else None
+
+    if int((~zone).sum()) >= least:
+        found = explains(~zone)
+        if found is not None:
+            fit, s = found
+            back = zone & (np.abs(centres @ fit.normal - fit.centre_offset) <= 2.0 * s)
+            if back.any():
+                again = _fit(centres[~zone | back], sensors[~zone | back], span)
+                fit = again if again.refined else fit
+            return fit
+    keep = np.ones(m, dtype=bool)
+    fit = whole
+    while zone[keep].any() and int(keep.sum()) > least:
+        res = centres @ fit.normal - fit.centre_offset
+        keep[int(np.argmin(np.where(keep & zone, res, np.inf)))] = False
+        found = explains(keep)
+        if found is None:
+            fit = _fit(centres[keep], sensors[keep], span)
+            if not fit.refined:
+                return None
+            continue
+        fit, s = found
+        # the rounding's shallower touches, inside the plane the rest now share
+        while int(keep.sum()) > least:
+            res = centres @ fit.normal - fit.centre_offset
+            shallow = keep & zone & (res < -2.0 * s)
+            if not shallow.any():
+                break
+            keep[int(np.argmin(np.where(shallow, res, np.inf)))] = False
+            trimmed = _fit(centres[keep], sensors[keep], span)
+            if not trimmed.refined:
+                break
+            fit = trimmed
+        return fit
+    return None
+
+
+def _rms(r: FloatArray) -> float:
+    return math.sqrt(float((r**2).mean())) if len(r) else 0.0
+
+
+def _refitted(face: Face, fit: _Fit, rho: float, noise: float) -> Face:
+    """``face`` with the plane ``fit`` of some of its centres (all its contacts kept); their
+    scatter is taken as at least the declared ``noise`` (a few centres can fit a plane
+    better than their noise by chance)."""
+    n = len(fit.residuals)
+    sigma = max(math.sqrt(_sse(fit) / max(n - 3, 1)), noise)
+    return Face(
+        normal=(float(fit.normal[0]), float(fit.normal[1]), float(fit.normal[2])),
+        offset=fit.centre_offset - rho,
+        n_contacts=face.n_contacts,
+        residual=math.sqrt(float((fit.residuals**2).mean())),
+        normal_uncertainty_deg=math.degrees(math.atan2(sigma, fit.span * math.sqrt(n))),
+        contacts=face.contacts,
+        refined=True,
+        offset_uncertainty=sigma / math.sqrt(n),
+    )
