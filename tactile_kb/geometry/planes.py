@@ -25,7 +25,13 @@ build dozens of sliver faces. :func:`merge_planes` turns the contacts of a recor
    :func:`_fold`), gives up a line of touches of an edge beside its face (:func:`_edge_line`)
    and the one or two touches that alone lift a line into a plane (:func:`_stray_touches`).
    Exact centres span a plane over a narrower spread than noisy ones (:func:`_exact_fitter`).
-3. **Merge coplanar faces** (a face whose contacts fired two neighbouring sensors).
+   With declared noise, a cluster whose touches closed a few distinct sensors is also split
+   by its readings where one plane misses them by more than the noise allows and each
+   reading's touches fit a plane of their own (:func:`_readings_apart`, :func:`_two_planes`):
+   the clustering joins a sensor and the mean of it and its neighbour, 15° apart, and two
+   faces of an icosahedron, 41.8° apart, can close exactly those.
+3. **Merge coplanar faces** (a face whose contacts fired two neighbouring sensors; with
+   declared noise, not two groups that :func:`_two_planes` tells apart).
 4. **Add the table**: "the equation of the support plane is the same as the equation of the
    polyhedron's supported surface", so the plane z = 0 with outward normal (0, 0, −1) is a
    face. Contacts on the table top itself (normal +z at z ≈ 0) are ignored.
@@ -56,6 +62,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 from scipy.cluster.hierarchy import fcluster, linkage
+from scipy.stats import chi2
 
 from tactile_kb.errors import GeometryError, UsageError
 from tactile_kb.geometry.polyhedron import face_width, polyhedron_from_planes
@@ -64,6 +71,7 @@ from tactile_kb.settings import DEFAULTS, current
 from tactile_kb.types import FloatArray, Vec3
 
 __all__ = [
+    "APART_LEVEL",
     "DEFAULT_CUT_DEG",
     "DEFAULT_MERGE_DEG",
     "DEFAULT_SPAN",
@@ -383,6 +391,7 @@ def _split(
     depth: int = 0,
     scale: float = 0.0,
     reach_deg: float = 90.0,
+    noise: float = 0.0,
 ) -> list[NDArray[np.intp]]:
     """Recursively split ``idx`` until each part's centres fit one plane within ``tol``.
 
@@ -398,7 +407,18 @@ def _split(
     f = fit(idx)
     if len(idx) < 2 or depth > 8:
         return [idx]
+
+    def deeper(part: NDArray[np.intp]) -> list[NDArray[np.intp]]:
+        return _split(
+            part, centres, normals, span_min, tol, fit, depth + 1, scale, reach_deg, noise
+        )
+
     if f.max_res <= tol:
+        # touches that closed different sensors and lie on two planes, not one, within the
+        # declared noise: two faces whose sensors the clustering joined
+        apart = _readings_apart(idx, normals, fit, noise) if noise > 0 else None
+        if apart is not None:
+            return deeper(idx[apart]) + deeper(idx[~apart])
         # the two-plane partitions, once for both looks (only where one plane misses some
         # centres by more than the least scale allows)
         pairs = (
@@ -413,14 +433,10 @@ def _split(
         if edge is None:
             fold = _fold(idx, normals, centres, fit, scale, reach_deg, pairs)
             if fold is not None:
-                return _split(
-                    idx[fold], centres, normals, span_min, tol, fit, depth + 1, scale, reach_deg
-                ) + _split(
-                    idx[~fold], centres, normals, span_min, tol, fit, depth + 1, scale, reach_deg
-                )
+                return deeper(idx[fold]) + deeper(idx[~fold])
             edge = _stray_touches(idx, centres, span_min, f)
             return [idx] if edge is None else [idx[~edge], idx[edge]]
-        rest = _split(idx[~edge], centres, normals, span_min, tol, fit, depth + 1, scale, reach_deg)
+        rest = deeper(idx[~edge])
         return [idx[edge], *rest]
     best: tuple[float, NDArray[np.bool_]] | None = None
     cos_reach = math.cos(math.radians(reach_deg))
@@ -442,9 +458,7 @@ def _split(
     if best is None or best[0] >= 0.5 * _sse(f):
         return [idx]
     mask = best[1]
-    return _split(
-        idx[mask], centres, normals, span_min, tol, fit, depth + 1, scale, reach_deg
-    ) + _split(idx[~mask], centres, normals, span_min, tol, fit, depth + 1, scale, reach_deg)
+    return deeper(idx[mask]) + deeper(idx[~mask])
 
 
 def _edge_line(
@@ -562,6 +576,66 @@ def _fold(
             continue
         score = _sse(parts[0]) + _sse(parts[1])
         if score * FOLD_RATIO <= _sse(f) and (best is None or score < best[0]):
+            best = (score, mask)
+    return None if best is None else best[1]
+
+
+APART_LEVEL = 0.99
+"""Two groups of tip centres lie on two planes, not one (:func:`_two_planes`), when the one
+plane through all of them misses them by more than this quantile of the chi-square spread the
+declared noise (or the groups' own scatter about their planes, when larger) gives."""
+
+
+def _two_planes(fit: FitFn, idx: NDArray[np.intp], mask: NDArray[np.bool_], noise: float) -> bool:
+    """Whether the tip centres ``idx[mask]`` and ``idx[~mask]`` lie on two planes rather than
+    one, as the declared ``noise`` (σ, metres) tells.
+
+    On one plane, the summed squared residuals of the plane through all of them are σ² times
+    a chi-square of ``m − 3`` degrees of freedom; ``σ²`` is the declared noise's, or the two
+    groups' own scatter about their planes (each fitted plane, or a line's plane through its
+    sensors' normal, takes three or two degrees of freedom) when that is larger (a scanned
+    surface's detail). Two faces 41.8° apart (an icosahedron's) each touched along one line
+    fit one plane within the split tolerance and the merge's loose median (both a few σ), yet
+    miss it by a V that sums to far more than the noise gives: they are two faces when the
+    sum exceeds the :data:`APART_LEVEL` quantile."""
+    m = len(idx)
+    joint, a, b = fit(idx), fit(idx[mask]), fit(idx[~mask])
+    own_dof = m - (3 if a.refined else 2) - (3 if b.refined else 2)
+    if m < 6 or own_dof < 1 or noise <= 0:
+        return False
+    var = max(noise * noise, (_sse(a) + _sse(b)) / own_dof)
+    return _sse(joint) > var * float(chi2.ppf(APART_LEVEL, m - 3))
+
+
+_READINGS = 4
+"""A group whose touches closed more than this many distinct sensors (or sensor pairs) is not
+split by its readings (:func:`_readings_apart`): a curved patch's."""
+
+
+def _readings_apart(
+    idx: NDArray[np.intp], normals: FloatArray, fit: FitFn, noise: float
+) -> NDArray[np.bool_] | None:
+    """The touches of ``idx`` that closed one sensor (or one pair) and lie on a plane of their
+    own, apart from the rest's (:func:`_two_planes`), as a mask, or None.
+
+    The normal clustering joins sensor readings less than its cut apart (15.5° for the
+    33-sensor finger: a sensor and the mean of it and its neighbour), and two faces 41.8°
+    apart can close exactly those (one 22.7° from its sensor, the other 5.7° from the
+    pair's mean). Exact centres tell them apart by the split tolerance and :func:`_fold`;
+    with noise, their planes' fold hides within a few σ, and only the noise-aware test of
+    the readings' own partition finds it. Each side has three or more touches; of several
+    readings, the one whose partition leaves the least summed squared residuals wins."""
+    _, which = _unique_rows(np.round(normals[idx], 9))
+    count = int(which.max()) + 1
+    if count < 2 or count > _READINGS:
+        return None
+    best: tuple[float, NDArray[np.bool_]] | None = None
+    for r in range(count if count > 2 else 1):
+        mask = which == r
+        if mask.sum() < 3 or (~mask).sum() < 3 or not _two_planes(fit, idx, mask, noise):
+            continue
+        score = _sse(fit(idx[mask])) + _sse(fit(idx[~mask]))
+        if best is None or score < best[0]:
             best = (score, mask)
     return None if best is None else best[1]
 
@@ -954,8 +1028,10 @@ def _faces_from_contacts(
     labels = _normal_clusters(normals[keep], cut)
     groups: list[NDArray[np.intp]] = []
     for lab in np.unique(labels):
-        groups += _split(keep[labels == lab], centres, normals, span_min, tol, fit, 0, scale, reach)
-    groups = _merge_coplanar(groups, fit, tol, merge_deg, merge_cone, centres, scale)
+        groups += _split(
+            keep[labels == lab], centres, normals, span_min, tol, fit, 0, scale, reach, noise
+        )
+    groups = _merge_coplanar(groups, fit, tol, merge_deg, merge_cone, centres, scale, noise)
     groups.sort(key=lambda g: int(g.min()))
     index = (
         np.arange(chosen.start, chosen.stop, chosen.step)
@@ -1057,6 +1133,7 @@ def _merge_coplanar(
     cone: float = 0.0,
     centres: FloatArray | None = None,
     scale: float = 0.0,
+    noise: float = 0.0,
 ) -> list[NDArray[np.intp]]:
     """Merge groups whose fitted planes coincide (normals within ``merge_deg``, one plane fits).
 
@@ -1069,7 +1146,10 @@ def _merge_coplanar(
     the other group's centres lie on it within ``geometry.unrefined_merge_sigmas`` × the
     spanning group's scatter (at least ``scale``, the robust fits' least scale), by their
     median: they are on one face, and their sensors' tilt is the quantisation or the
-    surface's detail, not another face."""
+    surface's detail, not another face. With declared ``noise`` (σ, metres) the plane of both
+    must also fit them as one plane does within that noise (:func:`_two_planes`): a line of
+    touches of the next face of an icosahedron, 41.8° away, lies within that median of the
+    plane through both, but misses it by a V far beyond the noise."""
     cos_min = math.cos(math.radians(merge_deg))
     loose = max(merge_deg, current().geometry.unrefined_merge_cones * cone)
     if centres is None:
@@ -1117,6 +1197,11 @@ def _merge_coplanar(
                     ):
                         continue
                     scatter, line = scale, both
+                # and the two groups on one plane as the declared noise allows (a line of
+                # touches on the next face, 41.8° away, lies within a few σ of it too)
+                first = np.arange(len(both)) < len(groups[i])
+                if _two_planes(fit, both, first, noise):
+                    continue
                 # the other group's centres on that plane, as close as a face's own lie to it
                 # (their median: a bump under one of them is the surface's detail)
                 off = np.abs(centres[line] @ joint.normal - joint.centre_offset)
