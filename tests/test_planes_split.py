@@ -100,6 +100,32 @@ def test_two_faces_of_one_sensor_across_a_ridge_are_two_faces(half_deg: float) -
     assert s[2] / math.sqrt(len(c)) > 0.001
 
 
+@pytest.mark.parametrize("seed", range(6))
+def test_two_faces_of_one_sensor_across_a_ridge_are_two_faces_under_noise(seed: int) -> None:
+    # The icosahedron's ridge (41.8°) with 0.5 mm noise on every tip centre: the one plane
+    # through both faces' centres misses them by less than 4 σ (the fold's exact gate) at
+    # most seeds, yet by far more than the noise's chi-square; two planes fit them within it.
+    noise = 0.0005
+    up, down, contacts = _ridge(20.9)
+    rng = np.random.default_rng(seed)
+    noisy = []
+    for c in contacts:
+        e = rng.normal(0.0, noise, 3)
+        noisy.append(
+            c.model_copy(
+                update={
+                    "centre": tuple(float(v) for v in np.asarray(c.centre) + e),
+                    "point": tuple(float(v) for v in np.asarray(c.point) + e),
+                }
+            )
+        )
+    faces = [f for f in merge_planes(_record(noisy, noise)) if f.source == "contacts"]
+    assert sorted(f.contacts for f in faces) == [tuple(range(10)), tuple(range(10, 20))]
+    for f in faces:
+        truth = up if f.normal[2] > 0 else down
+        assert _angle(f.normal, truth) < 3.0
+
+
 def test_touches_of_an_edge_with_their_own_sensor_do_not_tilt_the_face() -> None:
     # A face (normal tilted 20° down) touched along two close horizontal lines by the
     # horizontal sensor, and twice at each of two places on its upper edge (the layers'

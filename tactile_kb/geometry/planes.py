@@ -25,11 +25,12 @@ build dozens of sliver faces. :func:`merge_planes` turns the contacts of a recor
    :func:`_fold`), gives up a line of touches of an edge beside its face (:func:`_edge_line`)
    and the one or two touches that alone lift a line into a plane (:func:`_stray_touches`).
    Exact centres span a plane over a narrower spread than noisy ones (:func:`_exact_fitter`).
-   With declared noise, a cluster whose touches closed a few distinct sensors is also split
+   With declared noise, a cluster whose touches closed a few distinct sensors is first split
    by its readings where one plane misses them by more than the noise allows and each
    reading's touches fit a plane of their own (:func:`_readings_apart`, :func:`_two_planes`):
    the clustering joins a sensor and the mean of it and its neighbour, 15° apart, and two
-   faces of an icosahedron, 41.8° apart, can close exactly those.
+   faces of an icosahedron, 41.8° apart, can close exactly those; and the fold split also
+   takes two planes where one misses the centres beyond the noise (:func:`_beyond_noise`).
 3. **Merge coplanar faces** (a face whose contacts fired two neighbouring sensors; with
    declared noise, not two groups that :func:`_two_planes` tells apart).
 4. **Add the table**: "the equation of the support plane is the same as the equation of the
@@ -72,6 +73,7 @@ from tactile_kb.types import FloatArray, Vec3
 
 __all__ = [
     "APART_LEVEL",
+    "CROSS_SIGMAS",
     "DEFAULT_CUT_DEG",
     "DEFAULT_MERGE_DEG",
     "DEFAULT_SPAN",
@@ -413,12 +415,13 @@ def _split(
             part, centres, normals, span_min, tol, fit, depth + 1, scale, reach_deg, noise
         )
 
+    # touches that closed different sensors and lie on two planes, not one, within the
+    # declared noise: two faces whose sensors the clustering joined (k-planes below may part
+    # them otherwise, each side a mix of both)
+    apart = _readings_apart(idx, centres, normals, fit, noise) if noise > 0 else None
+    if apart is not None:
+        return deeper(idx[apart]) + deeper(idx[~apart])
     if f.max_res <= tol:
-        # touches that closed different sensors and lie on two planes, not one, within the
-        # declared noise: two faces whose sensors the clustering joined
-        apart = _readings_apart(idx, normals, fit, noise) if noise > 0 else None
-        if apart is not None:
-            return deeper(idx[apart]) + deeper(idx[~apart])
         # the two-plane partitions, once for both looks (only where one plane misses some
         # centres by more than the least scale allows)
         pairs = (
@@ -426,12 +429,14 @@ def _split(
                 (start, _kplanes(idx, start, centres, normals, span_min))
                 for start in _two_plane_starts(idx, centres, normals, f.normal)
             ]
-            if scale > 0 and len(idx) >= 5 and f.max_res > INSIDE_SIGMAS * scale
+            if scale > 0
+            and len(idx) >= 5
+            and (f.max_res > INSIDE_SIGMAS * scale or _beyond_noise(f, noise))
             else []
         )
         edge = _edge_line(idx, centres, normals, fit, scale, pairs) if scale > 0 else None
         if edge is None:
-            fold = _fold(idx, normals, centres, fit, scale, reach_deg, pairs)
+            fold = _fold(idx, normals, centres, fit, scale, reach_deg, pairs, noise)
             if fold is not None:
                 return deeper(idx[fold]) + deeper(idx[~fold])
             edge = _stray_touches(idx, centres, span_min, f)
@@ -534,6 +539,7 @@ def _fold(
     scale: float,
     reach_deg: float,
     pairs: Sequence[tuple[NDArray[np.bool_], NDArray[np.bool_]]],
+    noise: float = 0.0,
 ) -> NDArray[np.bool_] | None:
     """Two faces meeting at a fold in the centres ``idx`` that one plane fits within the split
     tolerance, as the mask of one of them, or None.
@@ -546,19 +552,26 @@ def _fold(
     each spanned by four or more centres, with summed squared residuals at most
     1/:data:`FOLD_RATIO` of the one plane's, each within ``reach_deg`` of its touches' sensor
     normals, and the fold convex: each face's centres inside the other's plane (a concave
-    fold, the inside of an L-block, is left to the split tolerance). ``pairs`` are the
+    fold, the inside of an L-block, is left to the split tolerance). With declared ``noise``
+    (σ) the fold hides within a few σ (a 1.9 mm worst residual against 4 σ = 2 mm, a ratio of
+    9 against 25), so where the one plane misses the centres beyond the noise
+    (:func:`_beyond_noise`), two planes that leave its summed squared residuals above the
+    same chi-square quantile of their own scatter (at least σ², ``m − 6`` degrees of
+    freedom) also do. ``pairs`` are the
     two-plane partitions (:func:`_two_plane_starts`, each with where :func:`_kplanes` took
     it)."""
     f = fit(idx)
-    if scale <= 0 or len(idx) < 8 or f.max_res <= INSIDE_SIGMAS * scale:
+    bent = _beyond_noise(f, noise)
+    if scale <= 0 or len(idx) < 8 or (f.max_res <= INSIDE_SIGMAS * scale and not bent):
         return None
+    n = len(idx)
     cos_reach = math.cos(math.radians(reach_deg))
     best: tuple[float, NDArray[np.bool_]] | None = None
     for _, mask in pairs:
         if mask.sum() < 4 or (~mask).sum() < 4:
             continue
         least = _least_sse(centres[idx[mask]]) + _least_sse(centres[idx[~mask]])
-        if least * FOLD_RATIO > _sse(f):
+        if least * FOLD_RATIO > _sse(f) and not bent:
             continue  # no fit of the two parts explains the centres well enough (below)
         parts = (fit(idx[mask]), fit(idx[~mask]))
         if not all(p.refined and p.max_res <= INSIDE_SIGMAS * scale for p in parts):
@@ -575,7 +588,13 @@ def _fold(
         if max(float(a_in_b.max()), float(b_in_a.max())) > INSIDE_SIGMAS * scale:
             continue
         score = _sse(parts[0]) + _sse(parts[1])
-        if score * FOLD_RATIO <= _sse(f) and (best is None or score < best[0]):
+        # with declared noise: the one plane misses them beyond the noise, or the two
+        # planes' own scatter when larger (a curved patch halved keeps its sagitta)
+        own = max(noise * noise, score / max(n - 6, 1))
+        ok = score * FOLD_RATIO <= _sse(f) or (
+            bent and _sse(f) > own * float(chi2.ppf(APART_LEVEL, n - 3))
+        )
+        if ok and (best is None or score < best[0]):
             best = (score, mask)
     return None if best is None else best[1]
 
@@ -586,7 +605,9 @@ plane through all of them misses them by more than this quantile of the chi-squa
 declared noise (or the groups' own scatter about their planes, when larger) gives."""
 
 
-def _two_planes(fit: FitFn, idx: NDArray[np.intp], mask: NDArray[np.bool_], noise: float) -> bool:
+def _two_planes(
+    fit: FitFn, centres: FloatArray, idx: NDArray[np.intp], mask: NDArray[np.bool_], noise: float
+) -> bool:
     """Whether the tip centres ``idx[mask]`` and ``idx[~mask]`` lie on two planes rather than
     one, as the declared ``noise`` (σ, metres) tells.
 
@@ -604,7 +625,9 @@ def _two_planes(fit: FitFn, idx: NDArray[np.intp], mask: NDArray[np.bool_], nois
     if m < 6 or own_dof < 1 or noise <= 0:
         return False
     var = max(noise * noise, (_sse(a) + _sse(b)) / own_dof)
-    return _sse(joint) > var * float(chi2.ppf(APART_LEVEL, m - 3))
+    if _sse(joint) <= var * float(chi2.ppf(APART_LEVEL, m - 3)):
+        return False
+    return _crosses(centres, fit, idx[mask], idx[~mask], noise)
 
 
 _READINGS = 4
@@ -612,8 +635,43 @@ _READINGS = 4
 split by its readings (:func:`_readings_apart`): a curved patch's."""
 
 
+def _crosses(
+    centres: FloatArray, fit: FitFn, a: NDArray[np.intp], b: NDArray[np.intp], noise: float
+) -> bool:
+    """Whether the groups ``a`` and ``b`` can be two faces by their lie: when one spans a plane
+    and the other is a line of touches (or a spot), whether the line crosses the plane's, its
+    centres' heights above it changing along it by more than :data:`CROSS_SIGMAS` standard
+    errors of the slope (σ the declared ``noise``, or their own scatter about that slope when
+    larger). Two spanning groups, or two lines, can always be.
+
+    A contour line on the next face of an icosahedron runs across the face's plane at 15° or
+    so; a line of touches of the edge beside a face (closing a sensor between the two faces')
+    runs along it, within the noise, at the rounding's depth inside it: those touches are
+    the face's edge, left to :func:`_edge_line` and :func:`edge_faces` as before."""
+    fa, fb = fit(a), fit(b)
+    if fa.refined == fb.refined:
+        return True
+    line, face = (a, fb) if fb.refined else (b, fa)
+    c = centres[line] - centres[line].mean(axis=0)
+    _, _, vt = np.linalg.svd(c, full_matrices=False)
+    t = c @ vt[0]
+    h = c @ face.normal
+    stt = float(t @ t)
+    if stt <= 0.0:
+        return False  # one spot
+    slope = float(t @ h) / stt
+    rest = h - slope * t
+    sigma = max(noise, math.sqrt(float(rest @ rest) / max(len(line) - 2, 1)))
+    return abs(slope) > CROSS_SIGMAS * sigma / math.sqrt(stt)
+
+
+CROSS_SIGMAS = 3.0
+"""A line of touches crosses a plane (:func:`_crosses`) when its slope out of it exceeds this
+many standard errors."""
+
+
 def _readings_apart(
-    idx: NDArray[np.intp], normals: FloatArray, fit: FitFn, noise: float
+    idx: NDArray[np.intp], centres: FloatArray, normals: FloatArray, fit: FitFn, noise: float
 ) -> NDArray[np.bool_] | None:
     """The touches of ``idx`` that closed one sensor (or one pair) and lie on a plane of their
     own, apart from the rest's (:func:`_two_planes`), as a mask, or None.
@@ -632,12 +690,22 @@ def _readings_apart(
     best: tuple[float, NDArray[np.bool_]] | None = None
     for r in range(count if count > 2 else 1):
         mask = which == r
-        if mask.sum() < 3 or (~mask).sum() < 3 or not _two_planes(fit, idx, mask, noise):
+        if mask.sum() < 3 or (~mask).sum() < 3 or not _two_planes(fit, centres, idx, mask, noise):
             continue
         score = _sse(fit(idx[mask])) + _sse(fit(idx[~mask]))
         if best is None or score < best[0]:
             best = (score, mask)
     return None if best is None else best[1]
+
+
+def _beyond_noise(f: _Fit, noise: float) -> bool:
+    """Whether one plane misses the (eight or more) centres of the fit ``f`` by more than the
+    declared ``noise`` (σ) allows: summed squared residuals above σ² times the
+    :data:`APART_LEVEL` quantile of a chi-square of ``m − 3`` degrees of freedom."""
+    m = len(f.residuals)
+    if noise <= 0 or not f.refined or m < 8:
+        return False
+    return _sse(f) > noise * noise * float(chi2.ppf(APART_LEVEL, m - 3))
 
 
 _STRAY = 2
@@ -1200,7 +1268,7 @@ def _merge_coplanar(
                 # and the two groups on one plane as the declared noise allows (a line of
                 # touches on the next face, 41.8° away, lies within a few σ of it too)
                 first = np.arange(len(both)) < len(groups[i])
-                if _two_planes(fit, both, first, noise):
+                if _two_planes(fit, centres, both, first, noise):
                     continue
                 # the other group's centres on that plane, as close as a face's own lie to it
                 # (their median: a bump under one of them is the surface's detail)
