@@ -627,7 +627,7 @@ def _two_planes(
     var = max(noise * noise, (_sse(a) + _sse(b)) / own_dof)
     if _sse(joint) <= var * float(chi2.ppf(APART_LEVEL, m - 3)):
         return False
-    return _crosses(centres, fit, idx[mask], idx[~mask], noise)
+    return _crosses(centres, fit, idx, mask, noise)
 
 
 _READINGS = 4
@@ -636,33 +636,43 @@ split by its readings (:func:`_readings_apart`): a curved patch's."""
 
 
 def _crosses(
-    centres: FloatArray, fit: FitFn, a: NDArray[np.intp], b: NDArray[np.intp], noise: float
+    centres: FloatArray, fit: FitFn, idx: NDArray[np.intp], mask: NDArray[np.bool_], noise: float
 ) -> bool:
-    """Whether the groups ``a`` and ``b`` can be two faces by their lie: when one spans a plane
-    and the other is a line of touches (or a spot), whether the line crosses the plane's, its
-    centres' heights above it changing along it by more than :data:`CROSS_SIGMAS` standard
-    errors of the slope (σ the declared ``noise``, or their own scatter about that slope when
-    larger). Two spanning groups, or two lines, can always be.
+    """Whether the groups ``idx[mask]`` and ``idx[~mask]`` can be two faces by their lie: a
+    line of touches (a group whose centres span no plane) must cross the plane of the other
+    group, when that spans one, or else the plane of both: its centres' heights above it
+    change along it by more than :data:`CROSS_SIGMAS` standard errors of the slope (σ the
+    declared ``noise``, or their own scatter about that slope when larger). Two spanning
+    groups can always be two faces.
 
     A contour line on the next face of an icosahedron runs across the face's plane at 15° or
-    so; a line of touches of the edge beside a face (closing a sensor between the two faces')
-    runs along it, within the noise, at the rounding's depth inside it: those touches are
-    the face's edge, left to :func:`_edge_line` and :func:`edge_faces` as before."""
+    so, and two such lines, one on each face, across the plane of both; a line of touches of
+    the edge beside a face (closing a sensor between the two faces') runs along the face's
+    plane, at the rounding's depth inside it, and two parallel lines (a lying cylinder's,
+    along its axis) lie in one plane whatever faces they are on: those stay as they were,
+    left to :func:`_edge_line`, :func:`edge_faces` and the curvature tests."""
+    a, b = idx[mask], idx[~mask]
     fa, fb = fit(a), fit(b)
-    if fa.refined == fb.refined:
+    if fa.refined and fb.refined:
         return True
-    line, face = (a, fb) if fb.refined else (b, fa)
-    c = centres[line] - centres[line].mean(axis=0)
-    _, _, vt = np.linalg.svd(c, full_matrices=False)
-    t = c @ vt[0]
-    h = c @ face.normal
-    stt = float(t @ t)
-    if stt <= 0.0:
-        return False  # one spot
-    slope = float(t @ h) / stt
-    rest = h - slope * t
-    sigma = max(noise, math.sqrt(float(rest @ rest) / max(len(line) - 2, 1)))
-    return abs(slope) > CROSS_SIGMAS * sigma / math.sqrt(stt)
+    if fa.refined != fb.refined:
+        lines, face = ([a], fb) if fb.refined else ([b], fa)
+    else:
+        lines, face = [a, b], fit(idx)
+    for line in lines:
+        c = centres[line] - centres[line].mean(axis=0)
+        _, _, vt = np.linalg.svd(c, full_matrices=False)
+        t = c @ vt[0]
+        h = c @ face.normal
+        stt = float(t @ t)
+        if stt <= 0.0:
+            continue  # one spot
+        slope = float(t @ h) / stt
+        rest = h - slope * t
+        sigma = max(noise, math.sqrt(float(rest @ rest) / max(len(line) - 2, 1)))
+        if abs(slope) > CROSS_SIGMAS * sigma / math.sqrt(stt):
+            return True
+    return False
 
 
 CROSS_SIGMAS = 3.0
