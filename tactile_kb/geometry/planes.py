@@ -557,7 +557,7 @@ def _fold(
     9 against 25), so where the one plane misses the centres beyond the noise
     (:func:`_beyond_noise`), two planes that leave its summed squared residuals above the
     same chi-square quantile of their own scatter (at least σ², ``m − 6`` degrees of
-    freedom) also do. ``pairs`` are the
+    freedom), their normals more than ``reach_deg`` (one sensor spacing) apart, also do. ``pairs`` are the
     two-plane partitions (:func:`_two_plane_starts`, each with where :func:`_kplanes` took
     it)."""
     f = fit(idx)
@@ -590,9 +590,13 @@ def _fold(
         score = _sse(parts[0]) + _sse(parts[1])
         # with declared noise: the one plane misses them beyond the noise, or the two
         # planes' own scatter when larger (a curved patch halved keeps its sagitta)
+        # (and the fold sharper than the reach, one sensor spacing: the best of a dozen
+        # partitions of one noisy face can beat the chi-square, a few degrees apart)
         own = max(noise * noise, score / max(n - 6, 1))
         ok = score * FOLD_RATIO <= _sse(f) or (
-            bent and _sse(f) > own * float(chi2.ppf(APART_LEVEL, n - 3))
+            bent
+            and _sse(f) > own * float(chi2.ppf(APART_LEVEL, n - 3))
+            and float(parts[0].normal @ parts[1].normal) <= cos_reach
         )
         if ok and (best is None or score < best[0]):
             best = (score, mask)
