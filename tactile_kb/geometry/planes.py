@@ -25,7 +25,14 @@ build dozens of sliver faces. :func:`merge_planes` turns the contacts of a recor
    :func:`_fold`), gives up a line of touches of an edge beside its face (:func:`_edge_line`)
    and the one or two touches that alone lift a line into a plane (:func:`_stray_touches`).
    Exact centres span a plane over a narrower spread than noisy ones (:func:`_exact_fitter`).
-3. **Merge coplanar faces** (a face whose contacts fired two neighbouring sensors).
+   With declared noise, a cluster whose touches closed a few distinct sensors is first split
+   by its readings where one plane misses them by more than the noise allows and each
+   reading's touches fit a plane of their own (:func:`_readings_apart`, :func:`_two_planes`):
+   the clustering joins a sensor and the mean of it and its neighbour, 15° apart, and two
+   faces of an icosahedron, 41.8° apart, can close exactly those; and the fold split also
+   takes two planes where one misses the centres beyond the noise (:func:`_beyond_noise`).
+3. **Merge coplanar faces** (a face whose contacts fired two neighbouring sensors; with
+   declared noise, not two groups that :func:`_two_planes` tells apart).
 4. **Add the table**: "the equation of the support plane is the same as the equation of the
    polyhedron's supported surface", so the plane z = 0 with outward normal (0, 0, −1) is a
    face. Contacts on the table top itself (normal +z at z ≈ 0) are ignored.
@@ -56,6 +63,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 from scipy.cluster.hierarchy import fcluster, linkage
+from scipy.stats import chi2
 
 from tactile_kb.errors import GeometryError, UsageError
 from tactile_kb.geometry.polyhedron import Polyhedron, face_width, polyhedron_from_planes
@@ -64,6 +72,8 @@ from tactile_kb.settings import DEFAULTS, current
 from tactile_kb.types import FloatArray, Vec3
 
 __all__ = [
+    "APART_LEVEL",
+    "CROSS_SIGMAS",
     "DEFAULT_CUT_DEG",
     "DEFAULT_MERGE_DEG",
     "DEFAULT_SPAN",
@@ -386,6 +396,7 @@ def _split(
     depth: int = 0,
     scale: float = 0.0,
     reach_deg: float = 90.0,
+    noise: float = 0.0,
 ) -> list[NDArray[np.intp]]:
     """Recursively split ``idx`` until each part's centres fit one plane within ``tol``.
 
@@ -401,6 +412,18 @@ def _split(
     f = fit(idx)
     if len(idx) < 2 or depth > 8:
         return [idx]
+
+    def deeper(part: NDArray[np.intp]) -> list[NDArray[np.intp]]:
+        return _split(
+            part, centres, normals, span_min, tol, fit, depth + 1, scale, reach_deg, noise
+        )
+
+    # touches that closed different sensors and lie on two planes, not one, within the
+    # declared noise: two faces whose sensors the clustering joined (k-planes below may part
+    # them otherwise, each side a mix of both)
+    apart = _readings_apart(idx, centres, normals, fit, noise) if noise > 0 else None
+    if apart is not None:
+        return deeper(idx[apart]) + deeper(idx[~apart])
     if f.max_res <= tol:
         # the two-plane partitions, once for both looks (only where one plane misses some
         # centres by more than the least scale allows)
@@ -409,21 +432,19 @@ def _split(
                 (start, _kplanes(idx, start, centres, normals, span_min))
                 for start in _two_plane_starts(idx, centres, normals, f.normal)
             ]
-            if scale > 0 and len(idx) >= 5 and f.max_res > INSIDE_SIGMAS * scale
+            if scale > 0
+            and len(idx) >= 5
+            and (f.max_res > INSIDE_SIGMAS * scale or _beyond_noise(f, noise))
             else []
         )
         edge = _edge_line(idx, centres, normals, fit, scale, pairs) if scale > 0 else None
         if edge is None:
-            fold = _fold(idx, normals, centres, fit, scale, reach_deg, pairs)
+            fold = _fold(idx, normals, centres, fit, scale, reach_deg, pairs, noise)
             if fold is not None:
-                return _split(
-                    idx[fold], centres, normals, span_min, tol, fit, depth + 1, scale, reach_deg
-                ) + _split(
-                    idx[~fold], centres, normals, span_min, tol, fit, depth + 1, scale, reach_deg
-                )
+                return deeper(idx[fold]) + deeper(idx[~fold])
             edge = _stray_touches(idx, centres, span_min, f)
             return [idx] if edge is None else [idx[~edge], idx[edge]]
-        rest = _split(idx[~edge], centres, normals, span_min, tol, fit, depth + 1, scale, reach_deg)
+        rest = deeper(idx[~edge])
         return [idx[edge], *rest]
     best: tuple[float, NDArray[np.bool_]] | None = None
     cos_reach = math.cos(math.radians(reach_deg))
@@ -445,9 +466,7 @@ def _split(
     if best is None or best[0] >= 0.5 * _sse(f):
         return [idx]
     mask = best[1]
-    return _split(
-        idx[mask], centres, normals, span_min, tol, fit, depth + 1, scale, reach_deg
-    ) + _split(idx[~mask], centres, normals, span_min, tol, fit, depth + 1, scale, reach_deg)
+    return deeper(idx[mask]) + deeper(idx[~mask])
 
 
 def _edge_line(
@@ -523,6 +542,7 @@ def _fold(
     scale: float,
     reach_deg: float,
     pairs: Sequence[tuple[NDArray[np.bool_], NDArray[np.bool_]]],
+    noise: float = 0.0,
 ) -> NDArray[np.bool_] | None:
     """Two faces meeting at a fold in the centres ``idx`` that one plane fits within the split
     tolerance, as the mask of one of them, or None.
@@ -535,19 +555,26 @@ def _fold(
     each spanned by four or more centres, with summed squared residuals at most
     1/:data:`FOLD_RATIO` of the one plane's, each within ``reach_deg`` of its touches' sensor
     normals, and the fold convex: each face's centres inside the other's plane (a concave
-    fold, the inside of an L-block, is left to the split tolerance). ``pairs`` are the
+    fold, the inside of an L-block, is left to the split tolerance). With declared ``noise``
+    (σ) the fold hides within a few σ (a 1.9 mm worst residual against 4 σ = 2 mm, a ratio of
+    9 against 25), so where the one plane misses the centres beyond the noise
+    (:func:`_beyond_noise`), two planes that leave its summed squared residuals above the
+    same chi-square quantile of their own scatter (at least σ², ``m − 6`` degrees of
+    freedom), their normals more than ``reach_deg`` (one sensor spacing) apart, also do. ``pairs`` are the
     two-plane partitions (:func:`_two_plane_starts`, each with where :func:`_kplanes` took
     it)."""
     f = fit(idx)
-    if scale <= 0 or len(idx) < 8 or f.max_res <= INSIDE_SIGMAS * scale:
+    bent = _beyond_noise(f, noise)
+    if scale <= 0 or len(idx) < 8 or (f.max_res <= INSIDE_SIGMAS * scale and not bent):
         return None
+    n = len(idx)
     cos_reach = math.cos(math.radians(reach_deg))
     best: tuple[float, NDArray[np.bool_]] | None = None
     for _, mask in pairs:
         if mask.sum() < 4 or (~mask).sum() < 4:
             continue
         least = _least_sse(centres[idx[mask]]) + _least_sse(centres[idx[~mask]])
-        if least * FOLD_RATIO > _sse(f):
+        if least * FOLD_RATIO > _sse(f) and not bent:
             continue  # no fit of the two parts explains the centres well enough (below)
         parts = (fit(idx[mask]), fit(idx[~mask]))
         if not all(p.refined and p.max_res <= INSIDE_SIGMAS * scale for p in parts):
@@ -564,9 +591,138 @@ def _fold(
         if max(float(a_in_b.max()), float(b_in_a.max())) > INSIDE_SIGMAS * scale:
             continue
         score = _sse(parts[0]) + _sse(parts[1])
-        if score * FOLD_RATIO <= _sse(f) and (best is None or score < best[0]):
+        # with declared noise: the one plane misses them beyond the noise, or the two
+        # planes' own scatter when larger (a curved patch halved keeps its sagitta)
+        # (and the fold sharper than the reach, one sensor spacing: the best of a dozen
+        # partitions of one noisy face can beat the chi-square, a few degrees apart)
+        own = max(noise * noise, score / max(n - 6, 1))
+        ok = score * FOLD_RATIO <= _sse(f) or (
+            bent
+            and _sse(f) > own * float(chi2.ppf(APART_LEVEL, n - 3))
+            and float(parts[0].normal @ parts[1].normal) <= cos_reach
+        )
+        if ok and (best is None or score < best[0]):
             best = (score, mask)
     return None if best is None else best[1]
+
+
+APART_LEVEL = 0.99
+"""Two groups of tip centres lie on two planes, not one (:func:`_two_planes`), when the one
+plane through all of them misses them by more than this quantile of the chi-square spread the
+declared noise (or the groups' own scatter about their planes, when larger) gives."""
+
+
+def _two_planes(
+    fit: FitFn, centres: FloatArray, idx: NDArray[np.intp], mask: NDArray[np.bool_], noise: float
+) -> bool:
+    """Whether the tip centres ``idx[mask]`` and ``idx[~mask]`` lie on two planes rather than
+    one, as the declared ``noise`` (σ, metres) tells.
+
+    On one plane, the summed squared residuals of the plane through all of them are σ² times
+    a chi-square of ``m − 3`` degrees of freedom; ``σ²`` is the declared noise's, or the two
+    groups' own scatter about their planes (each fitted plane, or a line's plane through its
+    sensors' normal, takes three or two degrees of freedom) when that is larger (a scanned
+    surface's detail). Two faces 41.8° apart (an icosahedron's) each touched along one line
+    fit one plane within the split tolerance and the merge's loose median (both a few σ), yet
+    miss it by a V that sums to far more than the noise gives: they are two faces when the
+    sum exceeds the :data:`APART_LEVEL` quantile."""
+    m = len(idx)
+    joint, a, b = fit(idx), fit(idx[mask]), fit(idx[~mask])
+    own_dof = m - (3 if a.refined else 2) - (3 if b.refined else 2)
+    if m < 6 or own_dof < 1 or noise <= 0:
+        return False
+    var = max(noise * noise, (_sse(a) + _sse(b)) / own_dof)
+    if _sse(joint) <= var * float(chi2.ppf(APART_LEVEL, m - 3)):
+        return False
+    return _crosses(centres, fit, idx, mask, noise)
+
+
+_READINGS = 4
+"""A group whose touches closed more than this many distinct sensors (or sensor pairs) is not
+split by its readings (:func:`_readings_apart`): a curved patch's."""
+
+
+def _crosses(
+    centres: FloatArray, fit: FitFn, idx: NDArray[np.intp], mask: NDArray[np.bool_], noise: float
+) -> bool:
+    """Whether the groups ``idx[mask]`` and ``idx[~mask]`` can be two faces by their lie: a
+    line of touches (a group whose centres span no plane) must cross the plane of the other
+    group, when that spans one, or else the plane of both: its centres' heights above it
+    change along it by more than :data:`CROSS_SIGMAS` standard errors of the slope (σ the
+    declared ``noise``, or their own scatter about that slope when larger). Two spanning
+    groups can always be two faces.
+
+    A contour line on the next face of an icosahedron runs across the face's plane at 15° or
+    so, and two such lines, one on each face, across the plane of both; a line of touches of
+    the edge beside a face (closing a sensor between the two faces') runs along the face's
+    plane, at the rounding's depth inside it, and two parallel lines (a lying cylinder's,
+    along its axis) lie in one plane whatever faces they are on: those stay as they were,
+    left to :func:`_edge_line`, :func:`edge_faces` and the curvature tests."""
+    a, b = idx[mask], idx[~mask]
+    fa, fb = fit(a), fit(b)
+    if fa.refined and fb.refined:
+        return True
+    if fa.refined != fb.refined:
+        lines, face = ([a], fb) if fb.refined else ([b], fa)
+    else:
+        lines, face = [a, b], fit(idx)
+    for line in lines:
+        c = centres[line] - centres[line].mean(axis=0)
+        _, _, vt = np.linalg.svd(c, full_matrices=False)
+        t = c @ vt[0]
+        h = c @ face.normal
+        stt = float(t @ t)
+        if stt <= 0.0:
+            continue  # one spot
+        slope = float(t @ h) / stt
+        rest = h - slope * t
+        sigma = max(noise, math.sqrt(float(rest @ rest) / max(len(line) - 2, 1)))
+        if abs(slope) > CROSS_SIGMAS * sigma / math.sqrt(stt):
+            return True
+    return False
+
+
+CROSS_SIGMAS = 3.0
+"""A line of touches crosses a plane (:func:`_crosses`) when its slope out of it exceeds this
+many standard errors."""
+
+
+def _readings_apart(
+    idx: NDArray[np.intp], centres: FloatArray, normals: FloatArray, fit: FitFn, noise: float
+) -> NDArray[np.bool_] | None:
+    """The touches of ``idx`` that closed one sensor (or one pair) and lie on a plane of their
+    own, apart from the rest's (:func:`_two_planes`), as a mask, or None.
+
+    The normal clustering joins sensor readings less than its cut apart (15.5° for the
+    33-sensor finger: a sensor and the mean of it and its neighbour), and two faces 41.8°
+    apart can close exactly those (one 22.7° from its sensor, the other 5.7° from the
+    pair's mean). Exact centres tell them apart by the split tolerance and :func:`_fold`;
+    with noise, their planes' fold hides within a few σ, and only the noise-aware test of
+    the readings' own partition finds it. Each side has three or more touches; of several
+    readings, the one whose partition leaves the least summed squared residuals wins."""
+    _, which = _unique_rows(np.round(normals[idx], 9))
+    count = int(which.max()) + 1
+    if count < 2 or count > _READINGS:
+        return None
+    best: tuple[float, NDArray[np.bool_]] | None = None
+    for r in range(count if count > 2 else 1):
+        mask = which == r
+        if mask.sum() < 3 or (~mask).sum() < 3 or not _two_planes(fit, centres, idx, mask, noise):
+            continue
+        score = _sse(fit(idx[mask])) + _sse(fit(idx[~mask]))
+        if best is None or score < best[0]:
+            best = (score, mask)
+    return None if best is None else best[1]
+
+
+def _beyond_noise(f: _Fit, noise: float) -> bool:
+    """Whether one plane misses the (eight or more) centres of the fit ``f`` by more than the
+    declared ``noise`` (σ) allows: summed squared residuals above σ² times the
+    :data:`APART_LEVEL` quantile of a chi-square of ``m − 3`` degrees of freedom."""
+    m = len(f.residuals)
+    if noise <= 0 or not f.refined or m < 8:
+        return False
+    return _sse(f) > noise * noise * float(chi2.ppf(APART_LEVEL, m - 3))
 
 
 _STRAY = 2
@@ -957,8 +1113,10 @@ def _faces_from_contacts(
     labels = _normal_clusters(normals[keep], cut)
     groups: list[NDArray[np.intp]] = []
     for lab in np.unique(labels):
-        groups += _split(keep[labels == lab], centres, normals, span_min, tol, fit, 0, scale, reach)
-    groups = _merge_coplanar(groups, fit, tol, merge_deg, merge_cone, centres, scale)
+        groups += _split(
+            keep[labels == lab], centres, normals, span_min, tol, fit, 0, scale, reach, noise
+        )
+    groups = _merge_coplanar(groups, fit, tol, merge_deg, merge_cone, centres, scale, noise)
     groups.sort(key=lambda g: int(g.min()))
     index = (
         np.arange(chosen.start, chosen.stop, chosen.step)
@@ -1066,6 +1224,7 @@ def _merge_coplanar(
     cone: float = 0.0,
     centres: FloatArray | None = None,
     scale: float = 0.0,
+    noise: float = 0.0,
 ) -> list[NDArray[np.intp]]:
     """Merge groups whose fitted planes coincide (normals within ``merge_deg``, one plane fits).
 
@@ -1083,7 +1242,11 @@ def _merge_coplanar(
     plane of both is the larger one's (within ``merge_deg``) and *every* centre of the smaller
     lies on the larger one's plane within ``geometry.unrefined_merge_sigmas`` × its scatter
     (at least ``scale``): a few touches over a short spread fit a plane turned by the noise
-    or a rounding's dips, but they lie on the face."""
+    or a rounding's dips, but they lie on the face. With declared ``noise`` (σ, metres) the
+    plane of both must also fit them as one plane does within that noise
+    (:func:`_two_planes`): a line of touches of the next face of an icosahedron, 41.8° away,
+    lies within that median of the plane through both, but misses it by a V far beyond the
+    noise."""
     cos_min = math.cos(math.radians(merge_deg))
     loose = max(merge_deg, current().geometry.unrefined_merge_cones * cone)
     if centres is None:
@@ -1151,6 +1314,11 @@ def _merge_coplanar(
                     ):
                         continue
                     scatter, line = scale, both
+                # and the two groups on one plane as the declared noise allows (a line of
+                # touches on the next face, 41.8° away, lies within a few σ of it too)
+                first = np.arange(len(both)) < len(groups[i])
+                if _two_planes(fit, centres, both, first, noise):
+                    continue
                 if len(spanning) < 2:
                     # the other group's centres on that plane, as close as a face's own lie to
                     # it (their median: a bump under one of them is the surface's detail)
