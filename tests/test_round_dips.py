@@ -11,36 +11,14 @@ from __future__ import annotations
 import math
 
 import numpy as np
+from touching import RHO, contact, touched_record
 
 from tactile_kb.geometry.model import build_model
 from tactile_kb.geometry.planes import contact_arrays, merge_planes, refit_past_roundings
 from tactile_kb.record import Contact, ExplorationRecord
-from tactile_kb.touch.finger import builtin_finger
 
-FINGER = builtin_finger("33")
-RHO = FINGER.radius
 HALF = 0.04  # the cube is 80 mm wide, its centre above the origin
 R = 0.008  # the rounding of the edge between +x and +y
-
-
-def _sensor(normal: np.ndarray) -> tuple[int, tuple[float, float, float]]:
-    """The sensor nearest to the inward direction ``−normal`` (the one that closes)."""
-    k = int(np.argmax(FINGER.matrix @ -normal))
-    d = FINGER.matrix[k]
-    return k, (float(d[0]), float(d[1]), float(d[2]))
-
-
-def _contact(step: int, centre: np.ndarray, normal: np.ndarray) -> Contact:
-    k, d = _sensor(normal)
-    point = tuple(float(c + RHO * x) for c, x in zip(centre, d, strict=True))
-    return Contact(
-        step=step,
-        centre=(float(centre[0]), float(centre[1]), float(centre[2])),
-        sensors=(k,),
-        sensor=k,
-        direction=d,
-        point=point,
-    )
 
 
 def _record(rolls: list[tuple[float, float]]) -> ExplorationRecord:
@@ -52,29 +30,22 @@ def _record(rolls: list[tuple[float, float]]) -> ExplorationRecord:
     # the +x side: flat touches up to where the rounding starts (y = HALF − R), then the roll
     for z, ys in ((0.02, (0.010, 0.014, 0.018, 0.022, 0.026)), (0.06, (0.020, 0.024, 0.028))):
         for y in ys:
-            contacts.append(_contact(len(contacts), np.array([HALF + RHO, y, z]), x_axis))
+            contacts.append(contact(len(contacts), np.array([HALF + RHO, y, z]), x_axis))
         for height, deg in rolls:
             if height != z:
                 continue
             phi = math.radians(deg)
             axis = np.array([HALF - R, HALF - R, z])
             centre = axis + (RHO + R) * np.array([math.cos(phi), math.sin(phi), 0.0])
-            contact = _contact(len(contacts), centre, x_axis)
-            contacts.append(contact)
+            contacts.append(contact(len(contacts), centre, x_axis))
     # the other sides and the top, flat, each touched at three spots spanning it
     for normal in (-x_axis, y_axis, -y_axis, np.array([0.0, 0.0, 1.0])):
         u = np.cross(normal, [0.0, 0.0, 1.0]) if abs(normal[2]) < 0.5 else x_axis
         v = np.cross(normal, u)
         middle = np.array([0.0, 0.0, HALF]) + (HALF + RHO) * normal
         for a, b in ((-0.02, -0.015), (0.015, -0.01), (0.0, 0.02), (0.01, 0.01)):
-            contacts.append(_contact(len(contacts), middle + a * u + b * v, normal))
-    return ExplorationRecord(
-        object="rounded cube",
-        finger=FINGER.name,
-        tip_radius=RHO,
-        sensor_directions=[tuple(map(float, s)) for s in FINGER.matrix],
-        contacts=contacts,
-    )
+            contacts.append(contact(len(contacts), middle + a * u + b * v, normal))
+    return touched_record("rounded cube", contacts)
 
 
 def _angle_to_x(record: ExplorationRecord) -> float:

@@ -12,27 +12,12 @@ from __future__ import annotations
 import math
 
 import numpy as np
+from touching import RHO, contact, touched_record
 
 from tactile_kb.geometry.planes import merge_planes
-from tactile_kb.record import Contact, ExplorationRecord
-from tactile_kb.touch.finger import builtin_finger
+from tactile_kb.record import ExplorationRecord
 
-FINGER = builtin_finger("33")
-RHO = FINGER.radius
 NOISE = 0.0005
-
-
-def _contact(step: int, centre: np.ndarray, sensor_normal: np.ndarray) -> Contact:
-    k = int(np.argmax(FINGER.matrix @ -sensor_normal))
-    d = tuple(float(x) for x in FINGER.matrix[k])
-    return Contact(
-        step=step,
-        centre=(float(centre[0]), float(centre[1]), float(centre[2])),
-        sensors=(k,),
-        sensor=k,
-        direction=d,
-        point=tuple(float(c + RHO * x) for c, x in zip(centre, d, strict=True)),
-    )
 
 
 def _record(small: list[np.ndarray], small_sensor: np.ndarray) -> ExplorationRecord:
@@ -44,17 +29,10 @@ def _record(small: list[np.ndarray], small_sensor: np.ndarray) -> ExplorationRec
     for a, z in enumerate((0.01, 0.025, 0.04, 0.055)):
         for b, y in enumerate((-0.05, -0.04, -0.03, -0.02, -0.01)):
             dx = jitter[(a + 2 * b) % 5]
-            contacts.append(_contact(len(contacts), np.array([0.05 + RHO + dx, y, z]), x))
+            contacts.append(contact(len(contacts), np.array([0.05 + RHO + dx, y, z]), x))
     for c in small:
-        contacts.append(_contact(len(contacts), c, small_sensor))
-    return ExplorationRecord(
-        object="two groups",
-        finger=FINGER.name,
-        tip_radius=RHO,
-        sensor_directions=[tuple(map(float, s)) for s in FINGER.matrix],
-        contacts=contacts,
-        noise=NOISE,
-    )
+        contacts.append(contact(len(contacts), c, small_sensor))
+    return touched_record("two groups", contacts, noise=NOISE)
 
 
 # the sensor beside the face's: the surface's detail under a few touches turned it
