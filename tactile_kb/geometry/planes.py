@@ -397,6 +397,7 @@ def _split(
     scale: float = 0.0,
     reach_deg: float = 90.0,
     noise: float = 0.0,
+    readings: _Readings | None = None,
 ) -> list[NDArray[np.intp]]:
     """Recursively split ``idx`` until each part's centres fit one plane within ``tol``.
 
@@ -415,7 +416,7 @@ def _split(
 
     def deeper(part: NDArray[np.intp]) -> list[NDArray[np.intp]]:
         return _split(
-            part, centres, normals, span_min, tol, fit, depth + 1, scale, reach_deg, noise
+            part, centres, normals, span_min, tol, fit, depth + 1, scale, reach_deg, noise, readings
         )
 
     # touches that closed different sensors and lie on two planes, not one, within the
@@ -425,6 +426,9 @@ def _split(
     if apart is not None:
         return deeper(idx[apart]) + deeper(idx[~apart])
     if f.max_res <= tol:
+        layers = _parallel_lines(idx, centres, normals, f, tol, readings)
+        if layers is not None:
+            return deeper(idx[layers]) + deeper(idx[~layers])
         # the two-plane partitions, once for both looks (only where one plane misses some
         # centres by more than the least scale allows)
         pairs = (
@@ -736,6 +740,95 @@ def _beyond_noise(f: _Fit, noise: float) -> bool:
 _STRAY = 2
 """At most this many touches off a line make a face of a line of touches and those (their
 plane is unchecked: :func:`_stray_touches`)."""
+
+
+SENSOR_MARGIN_DEG = 5.0
+"""Degrees: a plane contradicts a touch's sensors when a sensor that stayed OFF points this
+much nearer its normal than one that closed (:class:`_Readings`)."""
+
+
+class _Readings:
+    """Which of the finger's sensors were ON at each contact, read from the record only when
+    asked (:meth:`contradicted`).
+
+    A layout's sensors share one acceptance cone, so a sensor that points nearer a touched
+    plane's normal than one that closed closes too. A plane with a sensor that stayed OFF
+    well nearer its normal than one that closed, at every touch of a face, is not the
+    face those touches felt."""
+
+    def __init__(
+        self, record: ExplorationRecord, chosen: Sequence[int], sensors: FloatArray
+    ) -> None:
+        self._record = record
+        self._chosen = chosen
+        self.sensors = sensors
+        self._on: NDArray[np.bool_] | None = None
+        self._orientations: FloatArray | None = None
+
+    def _read(self) -> tuple[NDArray[np.bool_], FloatArray]:
+        if self._on is None or self._orientations is None:
+            contacts = [self._record.contacts[i] for i in self._chosen]
+            k = len(self.sensors)
+            on = np.zeros((len(contacts), k), dtype=bool)
+            for row, c in enumerate(contacts):
+                on[row, [s for s in c.sensors if 0 <= s < k]] = True
+            orientations = np.asarray([c.orientation for c in contacts], dtype=float)
+            orientations = orientations.reshape(-1, 2)
+            # a reading is used only where the direction reported is that of a sensor ON
+            # (the nearest to it): hand-made records may name sensors that do not match
+            seen = _head_frame(_column(contacts, "direction"), orientations)
+            nearest = np.argmax(seen @ self.sensors.T, axis=1)
+            on[~on[np.arange(len(contacts)), nearest]] = False
+            self._on, self._orientations = on, orientations
+        return self._on, self._orientations
+
+    def contradicted(self, idx: NDArray[np.intp], normal: FloatArray) -> bool:
+        """Whether the plane of outward ``normal`` contradicts the sensors of every contact
+        ``idx`` (each finger frame turned with its head)."""
+        if len(self.sensors) < 2:
+            return False
+        on, orientations = self._read()
+        on = on[idx]
+        if not on.any(axis=1).all():
+            return False
+        seen = _head_frame(np.repeat(-normal[None, :], len(idx), axis=0), orientations[idx])
+        angle = np.degrees(np.arccos(np.clip(seen @ self.sensors.T, -1.0, 1.0)))
+        closed = np.where(on, angle, -np.inf).max(axis=1)
+        nearer_off = np.where(on, np.inf, angle).min(axis=1)
+        return bool((nearer_off + SENSOR_MARGIN_DEG < closed).all())
+
+
+def _parallel_lines(
+    idx: NDArray[np.intp],
+    centres: FloatArray,
+    normals: FloatArray,
+    f: _Fit,
+    tol: float,
+    readings: _Readings | None,
+) -> NDArray[np.bool_] | None:
+    """Touches of two parallel faces fitted as one face between them: the part beyond the
+    widest gap along the touches' mean sensor normal, or None.
+
+    The centres of two lines (a T-block's stem side touched high and its crossbar's end
+    low, both with the same sensor) fit one plane through both exactly, tilted by however
+    far apart they lie. When that plane contradicts the sensors of every touch
+    (:meth:`_Readings.contradicted`) and the touches lie at offsets along their sensors'
+    normal with a gap wider than ``tol``, they are two faces, told apart by that gap."""
+    if readings is None or not f.refined or len(idx) < 4:
+        return None
+    if not readings.contradicted(idx, f.normal):
+        return None
+    mean = normals[idx].sum(axis=0)
+    length = float(np.linalg.norm(mean))
+    if length < 1e-9:
+        return None
+    depth = centres[idx] @ (mean / length)
+    order = np.sort(depth)
+    gaps = np.diff(order)
+    k = int(np.argmax(gaps))
+    if float(gaps[k]) <= tol:
+        return None
+    return np.asarray(depth > 0.5 * (order[k] + order[k + 1]), dtype=bool)
 
 
 def _stray_touches(
@@ -1075,6 +1168,7 @@ def merge_plane_arrays(
             cone if quantised else 0.0,
             noise,
             merge_cone=cone,
+            readings=_Readings(record, chosen, sensors),
         )
     if include_table and not any(
         f.normal[2] < -math.cos(math.radians(merge_deg)) and abs(f.offset) <= tol for f in faces
@@ -1094,6 +1188,7 @@ def _faces_from_contacts(
     cone: float,
     noise: float = 0.0,
     merge_cone: float = 0.0,
+    readings: _Readings | None = None,
 ) -> list[Face]:
     centres, directions, points = arrays
     normals = -directions
@@ -1122,9 +1217,21 @@ def _faces_from_contacts(
     groups: list[NDArray[np.intp]] = []
     for lab in np.unique(labels):
         groups += _split(
-            keep[labels == lab], centres, normals, span_min, tol, fit, 0, scale, reach, noise
+            keep[labels == lab],
+            centres,
+            normals,
+            span_min,
+            tol,
+            fit,
+            0,
+            scale,
+            reach,
+            noise,
+            readings,
         )
-    groups = _merge_coplanar(groups, fit, tol, merge_deg, merge_cone, centres, scale, noise)
+    groups = _merge_coplanar(
+        groups, fit, tol, merge_deg, merge_cone, centres, scale, noise, readings
+    )
     groups.sort(key=lambda g: int(g.min()))
     index = (
         np.arange(chosen.start, chosen.stop, chosen.step)
@@ -1233,6 +1340,7 @@ def _merge_coplanar(
     centres: FloatArray | None = None,
     scale: float = 0.0,
     noise: float = 0.0,
+    readings: _Readings | None = None,
 ) -> list[NDArray[np.intp]]:
     """Merge groups whose fitted planes coincide (normals within ``merge_deg``, one plane fits).
 
@@ -1254,7 +1362,8 @@ def _merge_coplanar(
     plane of both must also fit them as one plane does within that noise
     (:func:`_two_planes`): a line of touches of the next face of an icosahedron, 41.8° away,
     lies within that median of the plane through both, but misses it by a V far beyond the
-    noise."""
+    noise. Nor do two groups merge whose plane contradicts the sensors of every touch
+    (``readings``, :func:`_parallel_lines`): two parallel faces touched along a line each."""
     cos_min = math.cos(math.radians(merge_deg))
     loose = max(merge_deg, current().geometry.unrefined_merge_cones * cone)
     if centres is None:
@@ -1287,6 +1396,8 @@ def _merge_coplanar(
             both = np.concatenate([groups[i], groups[j]])
             joint = fit(both)
             if joint.max_res > tol:
+                continue
+            if joint.refined and readings is not None and readings.contradicted(both, joint.normal):
                 continue
             if fits[i].normal @ fits[j].normal < cos_min:
                 if not joint.refined or centres is None:
