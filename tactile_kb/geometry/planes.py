@@ -1250,9 +1250,11 @@ def _faces_from_contacts(
     for g in groups:
         f = fit(g)
         m = len(g)
-        sigma = math.sqrt(_sse(f) / max(m - 3 if f.refined else m - 1, 1))
-        if m <= 4:  # three or four centres fit a plane (nearly) exactly: trust the noise,
-            sigma = max(sigma, noise, detail)  # or the detail the other faces show
+        # the centres' scatter about the plane, never less than the declared noise: a few
+        # centres can fit a plane better than their noise by chance
+        sigma = max(math.sqrt(_sse(f) / max(m - 3 if f.refined else m - 1, 1)), noise)
+        if m <= 4:  # three or four centres fit a plane (nearly) exactly: trust the detail
+            sigma = max(sigma, detail)  # the other faces show
         if f.refined:
             unc = math.degrees(math.atan2(sigma, f.span * math.sqrt(m)))
         else:
