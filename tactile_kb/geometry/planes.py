@@ -742,6 +742,10 @@ _STRAY = 2
 plane is unchecked: :func:`_stray_touches`)."""
 
 
+PARALLEL_SPREAD = 0.5
+"""Two parallel faces touched along a line each (:func:`_parallel_lines`) lie apart along
+their sensor's normal by a gap at least 1 / this times either line's own spread along it."""
+
 SENSOR_MARGIN_DEG = 5.0
 """Degrees: a plane contradicts a touch's sensors when a sensor that stayed OFF points this
 much nearer its normal than one that closed (:class:`_Readings`)."""
@@ -826,7 +830,11 @@ def _parallel_lines(
     order = np.sort(depth)
     gaps = np.diff(order)
     k = int(np.argmax(gaps))
-    if float(gaps[k]) <= tol:
+    gap = float(gaps[k])
+    # each part square to the sensor, as a face it felt is: its depths spread far less
+    # than the gap (a bump that turned a few touches' sensors leaves them spread along it)
+    spread = max(float(order[k] - order[0]), float(order[-1] - order[k + 1]))
+    if gap <= tol or spread > PARALLEL_SPREAD * gap:
         return None
     return np.asarray(depth > 0.5 * (order[k] + order[k + 1]), dtype=bool)
 
@@ -1230,7 +1238,7 @@ def _faces_from_contacts(
             readings,
         )
     groups = _merge_coplanar(
-        groups, fit, tol, merge_deg, merge_cone, centres, scale, noise, readings
+        groups, fit, tol, merge_deg, merge_cone, centres, scale, noise, readings, normals
     )
     groups.sort(key=lambda g: int(g.min()))
     index = (
@@ -1343,6 +1351,7 @@ def _merge_coplanar(
     scale: float = 0.0,
     noise: float = 0.0,
     readings: _Readings | None = None,
+    sensor_normals: FloatArray | None = None,
 ) -> list[NDArray[np.intp]]:
     """Merge groups whose fitted planes coincide (normals within ``merge_deg``, one plane fits).
 
@@ -1364,8 +1373,8 @@ def _merge_coplanar(
     plane of both must also fit them as one plane does within that noise
     (:func:`_two_planes`): a line of touches of the next face of an icosahedron, 41.8° away,
     lies within that median of the plane through both, but misses it by a V far beyond the
-    noise. Nor do two groups merge whose plane contradicts the sensors of every touch
-    (``readings``, :func:`_parallel_lines`): two parallel faces touched along a line each."""
+    noise. Nor do two groups merge that :func:`_parallel_lines` would part again (with the
+    sensors' ``readings`` and ``sensor_normals``): two parallel faces touched along a line each."""
     cos_min = math.cos(math.radians(merge_deg))
     loose = max(merge_deg, current().geometry.unrefined_merge_cones * cone)
     if centres is None:
@@ -1399,7 +1408,11 @@ def _merge_coplanar(
             joint = fit(both)
             if joint.max_res > tol:
                 continue
-            if joint.refined and readings is not None and readings.contradicted(both, joint.normal):
+            if (
+                sensor_normals is not None
+                and centres is not None
+                and _parallel_lines(both, centres, sensor_normals, joint, tol, readings) is not None
+            ):
                 continue
             if fits[i].normal @ fits[j].normal < cos_min:
                 if not joint.refined or centres is None:
