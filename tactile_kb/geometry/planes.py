@@ -1026,7 +1026,9 @@ def _is_quantised(directions: FloatArray, sensors: FloatArray) -> bool:
     return bool(found.all())
 
 
-def _head_frame(directions: FloatArray, orientations: Sequence[Sequence[float]]) -> FloatArray:
+def _head_frame(
+    directions: FloatArray, orientations: Sequence[Sequence[float]] | FloatArray
+) -> FloatArray:
     """The world ``directions`` in the frame of the finger that reported each (its head at
     ``orientations``, tilt and turn in degrees, as :attr:`tactile_kb.record.Contact.orientation`
     holds them): a tilted probe's sensors are the layout's sensors turned with the head, and
