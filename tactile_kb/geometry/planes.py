@@ -788,13 +788,15 @@ class _Readings:
 
     def contradicted(self, idx: NDArray[np.intp], normal: FloatArray) -> bool:
         """Whether the plane of outward ``normal`` contradicts the sensors of every contact
-        ``idx`` (each finger frame turned with its head)."""
+        ``idx`` (each finger frame turned with its head), all of which closed the same
+        sensors: a rough surface's touches, whose sensors the bumps turn one way and another,
+        say nothing of the plane they lie on."""
         if len(self.sensors) < 2:
             return False
         on, orientations = self._read()
         on = on[idx]
-        if not on.any(axis=1).all():
-            return False
+        if not on[0].any() or not (on == on[0]).all():
+            return False  # only one reading, the same at every touch, says which way
         seen = _head_frame(np.repeat(-normal[None, :], len(idx), axis=0), orientations[idx])
         angle = np.degrees(np.arccos(np.clip(seen @ self.sensors.T, -1.0, 1.0)))
         closed = np.where(on, angle, -np.inf).max(axis=1)
