@@ -772,12 +772,15 @@ class _Readings:
     def _read(self) -> tuple[NDArray[np.bool_], FloatArray]:
         if self._on is None or self._orientations is None:
             contacts = [self._record.contacts[i] for i in self._chosen]
-            k = len(self.sensors)
-            on = np.zeros((len(contacts), k), dtype=bool)
-            for row, c in enumerate(contacts):
-                on[row, [s for s in c.sensors if 0 <= s < k]] = True
-            orientations = np.asarray([c.orientation for c in contacts], dtype=float)
-            orientations = orientations.reshape(-1, 2)
+            m, k = len(contacts), len(self.sensors)
+            fired = list(map(operator.attrgetter("sensors"), contacts))
+            counts = np.fromiter(map(len, fired), dtype=np.intp, count=m)
+            which = np.fromiter(itertools.chain.from_iterable(fired), dtype=np.intp)
+            rows = np.repeat(np.arange(m), counts)
+            valid = (which >= 0) & (which < k)
+            on = np.zeros((m, k), dtype=bool)
+            on[rows[valid], which[valid]] = True
+            orientations = _column(contacts, "orientation", 2)
             # a reading is used only where the direction reported is that of a sensor ON
             # (the nearest to it): hand-made records may name sensors that do not match
             seen = _head_frame(_column(contacts, "direction"), orientations)
@@ -822,8 +825,6 @@ def _parallel_lines(
     normal with a gap wider than ``tol``, they are two faces, told apart by that gap."""
     if readings is None or not f.refined or len(idx) < 4:
         return None
-    if not readings.contradicted(idx, f.normal):
-        return None
     mean = normals[idx].sum(axis=0)
     length = float(np.linalg.norm(mean))
     if length < 1e-9:
@@ -837,6 +838,9 @@ def _parallel_lines(
     # than the gap (a bump that turned a few touches' sensors leaves them spread along it)
     spread = max(float(order[k] - order[0]), float(order[-1] - order[k + 1]))
     if gap <= tol or spread > PARALLEL_SPREAD * gap:
+        return None
+    # the sensors last: reading them is the dearest test, and most groups fail the gap's
+    if not readings.contradicted(idx, f.normal):
         return None
     return np.asarray(depth > 0.5 * (order[k] + order[k + 1]), dtype=bool)
 
@@ -1055,10 +1059,10 @@ def contact_arrays(contacts: Sequence[Contact]) -> tuple[FloatArray, FloatArray,
     return _column(contacts, "centre"), _column(contacts, "direction"), _column(contacts, "point")
 
 
-def _column(contacts: Sequence[Contact], name: str) -> FloatArray:
+def _column(contacts: Sequence[Contact], name: str, width: int = 3) -> FloatArray:
     m = len(contacts)
     flat = itertools.chain.from_iterable(map(operator.attrgetter(name), contacts))
-    return np.fromiter(flat, dtype=float, count=3 * m).reshape(m, 3)
+    return np.fromiter(flat, dtype=float, count=width * m).reshape(m, width)
 
 
 def merge_planes(
