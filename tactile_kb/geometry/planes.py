@@ -1882,16 +1882,10 @@ def refit_past_roundings(
 
     Parameters
     ----------
-    faces, supporting
+    faces, supporting, rho, noise, rounding
         As for :func:`explained_faces`.
     arrays
         ``(centres, directions, points)`` of the record's contacts (:func:`contact_arrays`).
-    rho
-        The tip radius.
-    noise
-        σ of the contact positions (m).
-    rounding
-        ``geometry.edge_rounding`` by default.
     min_contacts
         Faces with fewer contacts are left as they are.
     """
