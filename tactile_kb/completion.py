@@ -172,7 +172,9 @@ def completion_probes(model: ObjectModel, *, height_gap: float | None = None) ->
     * Open: one probe per open direction (approached from that side at the middle of the
       touched heights; towards +z, from above), or, when the planes contradict each other
       and name no direction, one per horizontal side (every 45°) and the top that no face
-      faces yet. Directions under the object (the table's side) are not probed.
+      faces yet. Directions under the object (the table's side) are not probed. Planes
+      that close only far from the touched points are then probed on the way to the far
+      corner (:func:`_far_closure_probes`).
     * Closed: one probe per side face whose tip centres lie at one height, at the other end
       of the face's height range (faces lower than the tip's diameter are left as they are),
       and two from above beside a top whose tip centres lie along one line (a ridge); then
@@ -214,6 +216,7 @@ def completion_probes(model: ObjectModel, *, height_gap: float | None = None) ->
                 probes.append(
                     Probe(_v(target), _v(d), reach, f"open towards {_name(d)}", middle=True)
                 )
+        probes += _far_closure_probes(model, rho)
         probes += _one_height_probes(model, centres, rho, gap)
         unique = {p.reason: p for p in reversed(probes)}  # the first of each direction
         return [p for p in probes if unique[p.reason] is p]
@@ -269,6 +272,64 @@ def completion_probes(model: ObjectModel, *, height_gap: float | None = None) ->
     probes += corner_probes(model)
     probes += second_spot_probes(model)
     return probes
+
+
+FAR_FACE_NZ = -0.5
+"""A face whose normal's z component is below this (a deep undercut) is the last choice for a
+probe towards a far closure (:func:`_far_closure_probes`): the finger meets it only indexed
+upwards, near the table."""
+
+
+def _far_closure_probes(model: ObjectModel, rho: float) -> list[Probe]:
+    """Probes of the faces that meet far from the touched points, on the way there.
+
+    Planes that close, but only far from where they were touched, leave the model open
+    (:func:`~tactile_kb.geometry.polyhedron.polyhedron_from_planes`' ``bound``): a long end
+    never explored, or a spike the contours never reached (an irregular tetrahedron's
+    sharp corner on the table, beyond the lowest layer). A probe from that side at the
+    middle of the touched heights meets the faces the model has, again. These probe a face
+    through each far vertex (``model.open_points``) halfway there from the touched points,
+    approached along its normal, the most upward-facing first: a touch on its plane carries
+    the touched points towards the vertex (the model then closes within its bound, or the
+    next such probe goes further); a touch elsewhere is a face the model lacked; nothing
+    there, a face that ends sooner. The point probed must lie on the model's side of every
+    other plane; the table is never probed."""
+    if not model.open_points:
+        return []
+    record = model.record
+    centres = np.asarray([c.centre for c in record.contacts], dtype=float).reshape(-1, 3)
+    which = [k for k, s in enumerate(model.supporting) if s]
+    normals = np.asarray([model.faces[k].normal for k in which], dtype=float).reshape(-1, 3)
+    offsets = np.asarray([model.faces[k].offset for k in which], dtype=float)
+    if len(centres) == 0 or len(normals) == 0:
+        return []
+    middle = centres.mean(axis=0)
+    out: list[Probe] = []
+    for d, v in zip(model.open_directions, model.open_points, strict=False):
+        far = np.asarray(v, dtype=float)
+        size = float(np.linalg.norm(far - middle))
+        tol = max(1e-4, 1e-3 * size)
+        through = np.flatnonzero(np.abs(normals @ far - offsets) <= tol)
+        halfway = 0.5 * (middle + far)
+        order = sorted(
+            (int(k) for k in through if normals[k, 2] > -0.95),
+            key=lambda k: (normals[k, 2] < FAR_FACE_NZ, -normals[k, 2]),
+        )
+        for k in order:
+            n = normals[k]
+            spot = halfway + (offsets[k] - float(n @ halfway)) * n
+            if float((normals @ spot - offsets).max()) > tol:
+                continue  # beyond another plane: not on this face
+            out.append(
+                Probe(
+                    _v(spot + rho * n),
+                    _v(n),
+                    4.0 * rho,
+                    f"the planes close far towards {_name(np.asarray(d, dtype=float))}",
+                )
+            )
+            break
+    return out
 
 
 def second_spot_probes(model: ObjectModel) -> list[Probe]:

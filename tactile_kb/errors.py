@@ -112,10 +112,18 @@ class GeometryError(TactileKBError):
 
 
 class OpenModelError(GeometryError):
-    """The planes do not bound a region; ``open_directions`` are unit vectors left unexplored."""
+    """The planes do not bound a region; ``open_directions`` are unit vectors left unexplored.
+    When the planes do close, but only far from where they were touched, ``far_points`` are
+    the far vertices, one per open direction (otherwise empty)."""
 
-    def __init__(self, message: str, open_directions: list[tuple[float, float, float]]) -> None:
+    def __init__(
+        self,
+        message: str,
+        open_directions: list[tuple[float, float, float]],
+        far_points: list[tuple[float, float, float]] | None = None,
+    ) -> None:
         self.open_directions = open_directions
+        self.far_points = far_points or []
         super().__init__(message)
 
 

@@ -120,6 +120,9 @@ class ObjectModel:
     supporting: tuple[bool, ...]
     open_reason: str = ""
     open_directions: list[tuple[float, float, float]] = field(default_factory=list)
+    open_points: list[tuple[float, float, float]] = field(default_factory=list)
+    """When the planes close, but only far from the touched points: the far vertex of each
+    of ``open_directions`` (metres); otherwise empty."""
     layers: tuple[LayerSection, ...] = ()
     options: dict[str, Any] = field(default_factory=dict)
     face_of: tuple[int, ...] = ()
@@ -313,6 +316,7 @@ def build_model(
             supporting=tuple(supporting),
             open_reason=str(exc),
             open_directions=exc.open_directions,
+            open_points=exc.far_points,
             layers=layers,
             options=options,
         )

@@ -72,6 +72,7 @@ from tactile_kb.settings import DEFAULTS, current
 from tactile_kb.types import FloatArray, Vec3
 
 __all__ = [
+    "ACUTE_COS",
     "APART_LEVEL",
     "CROSS_SIGMAS",
     "DEFAULT_CUT_DEG",
@@ -1644,7 +1645,15 @@ def edge_faces(
                 -outside.max(axis=1),
                 -np.linalg.norm(c - q, axis=1),
             )
-            near = np.abs(q @ poly.normals.T - grown) <= 0.5 * rho + 1e-9
+            # nearer: the tip's own reach past an edge sharper than a right angle
+            touching = nearest_points(c, poly.normals, poly.offsets)
+            acute = _acute_penetration(c, touching, poly, rho)
+            penetration = np.minimum(penetration, acute)
+            # the faces it lies against: those near it, and at a sharp edge those of the edge
+            near = (np.abs(q @ poly.normals.T - grown) <= 0.5 * rho + 1e-9) | (
+                np.isfinite(acute)[:, None]
+                & (np.abs(touching @ poly.normals.T - poly.offsets) <= 0.5 * rho + 1e-9)
+            )
             against = [others[int(poly.plane_index[fi])] for fi in np.flatnonzero(near.any(0))]
             # the widest of them: next to it may lie another edge face, not yet removed
             width = max((widths.get(j, 0.0) for j in against), default=0.0)
@@ -1660,6 +1669,32 @@ def edge_faces(
             return sorted(removed)
         kept.remove(best)
         removed.append(best)
+
+
+ACUTE_COS = -0.5
+"""Two planes whose normals' cosine is below this meet at a sharp edge (less than 60°), where
+:func:`edge_faces` measures a touch's penetration from the edge itself
+(:func:`_acute_penetration`): at a right angle the planes moved out by ρ overshoot the tip's
+reach by 0.41 ρ only, and a box's corners, whose normals are about 90° apart, keep the
+planes' measure."""
+
+
+def _acute_penetration(c: FloatArray, q: FloatArray, poly: Polyhedron, rho: float) -> FloatArray:
+    """How far each tip centre ``c`` outside ``poly`` lies nearer than ρ to it, where its
+    nearest point ``q`` is on an edge or a vertex at which two planes meet at less than 60°
+    (their normals' cosine below :data:`ACUTE_COS`); ``inf`` elsewhere.
+
+    The planes moved out by ρ (:func:`edge_faces`' penetration) meet beyond such an edge,
+    by ρ (1/sin(α/2) − 1) for an angle α (2.2 ρ at a tetrahedron's 37°), far beyond any
+    tip that touches it, whose centre lies ρ from the edge itself."""
+    out = np.full(len(c), np.inf)
+    dist = np.linalg.norm(c - q, axis=1)
+    tol = 0.05 * rho  # Dykstra's nearest points lie on their planes only so nearly
+    for i in np.flatnonzero(dist > tol):
+        on = np.flatnonzero(np.abs(poly.normals @ q[i] - poly.offsets) <= tol)
+        if len(on) >= 2 and float((poly.normals[on] @ poly.normals[on].T).min()) < ACUTE_COS:
+            out[i] = rho - float(dist[i])
+    return out
 
 
 def _signed_distance(x: FloatArray, normals: FloatArray, offsets: FloatArray) -> FloatArray:

@@ -226,20 +226,24 @@ def _fmt(d: tuple[float, float, float]) -> str:
 
 def _far_directions(
     raw: FloatArray, centre: FloatArray, radius: float
-) -> list[tuple[float, float, float]]:
+) -> list[tuple[tuple[float, float, float], tuple[float, float, float]]]:
+    """``(direction, vertex)`` of the vertices ``raw`` further than ``radius`` from
+    ``centre``, furthest first, one per direction (those within 30° of one kept are left
+    out)."""
     rel = raw - centre
     dist = np.linalg.norm(rel, axis=1)
-    out: list[FloatArray] = []
+    out: list[tuple[FloatArray, FloatArray]] = []
     for i in np.argsort(-dist):
         if dist[i] <= radius:
             break
         d = rel[i] / dist[i]
-        if not any(float(d @ o) > math.cos(math.radians(30.0)) for o in out):
-            out.append(d)
-    return [
-        (round(float(x), 6) + 0.0, round(float(y), 6) + 0.0, round(float(z), 6) + 0.0)
-        for x, y, z in out
-    ]
+        if not any(float(d @ o) > math.cos(math.radians(30.0)) for o, _ in out):
+            out.append((d, raw[i]))
+    return [(_rounded(d), _rounded(v)) for d, v in out]
+
+
+def _rounded(v: FloatArray) -> tuple[float, float, float]:
+    return (round(float(v[0]), 6) + 0.0, round(float(v[1]), 6) + 0.0, round(float(v[2]), 6) + 0.0)
 
 
 def _interior_point(
@@ -474,11 +478,12 @@ def polyhedron_from_planes(
     if bound is not None:
         far = _far_directions(built.raw, np.asarray(bound[0], dtype=float), float(bound[1]))
         if far:
-            names = ", ".join(_fmt(o) for o in far[:6])
+            names = ", ".join(_fmt(o) for o, _ in far[:6])
             raise OpenModelError(
                 f"the {len(n)} planes close only far from the touched points: open towards "
                 f"{names} (explore that side)",
-                far,
+                [o for o, _ in far],
+                [v for _, v in far],
             )
     if built.late is not None:
         raise built.late()
