@@ -1645,7 +1645,7 @@ def edge_faces(
                 -outside.max(axis=1),
                 -np.linalg.norm(c - q, axis=1),
             )
-            # nearer: the tip's own reach past an edge sharper than a right angle
+            # nearer: the tip's own reach past an edge sharper than 60° (ACUTE_COS)
             touching = nearest_points(c, poly.normals, poly.offsets)
             acute = _acute_penetration(c, touching, poly, rho)
             penetration = np.minimum(penetration, acute)
