@@ -1645,15 +1645,11 @@ def edge_faces(
                 -outside.max(axis=1),
                 -np.linalg.norm(c - q, axis=1),
             )
-            # nearer: the tip's own reach past an edge sharper than 60° (ACUTE_COS)
-            touching = nearest_points(c, poly.normals, poly.offsets)
-            acute = _acute_penetration(c, touching, poly, rho)
+            # nearer: the tip's own reach past an edge sharper than 60° (ACUTE_COS); the
+            # faces it lies against: those near it, and at a sharp edge those of the edge
+            acute, at_edge = _acute_penetration(c, poly, rho)
             penetration = np.minimum(penetration, acute)
-            # the faces it lies against: those near it, and at a sharp edge those of the edge
-            near = (np.abs(q @ poly.normals.T - grown) <= 0.5 * rho + 1e-9) | (
-                np.isfinite(acute)[:, None]
-                & (np.abs(touching @ poly.normals.T - poly.offsets) <= 0.5 * rho + 1e-9)
-            )
+            near = (np.abs(q @ poly.normals.T - grown) <= 0.5 * rho + 1e-9) | at_edge
             against = [others[int(poly.plane_index[fi])] for fi in np.flatnonzero(near.any(0))]
             # the widest of them: next to it may lie another edge face, not yet removed
             width = max((widths.get(j, 0.0) for j in against), default=0.0)
@@ -1679,22 +1675,32 @@ reach by 0.41 ρ only, and a box's corners, whose normals are about 90° apart, 
 planes' measure."""
 
 
-def _acute_penetration(c: FloatArray, q: FloatArray, poly: Polyhedron, rho: float) -> FloatArray:
+def _acute_penetration(
+    c: FloatArray, poly: Polyhedron, rho: float
+) -> tuple[FloatArray, NDArray[np.bool_]]:
     """How far each tip centre ``c`` outside ``poly`` lies nearer than ρ to it, where its
-    nearest point ``q`` is on an edge or a vertex at which two planes meet at less than 60°
-    (their normals' cosine below :data:`ACUTE_COS`); ``inf`` elsewhere.
+    nearest point is on an edge or a vertex at which two planes meet at less than 60°
+    (their normals' cosine below :data:`ACUTE_COS`); ``inf`` elsewhere. With it, which of
+    ``poly``'s planes pass within ρ/2 of that nearest point (none for the others).
 
     The planes moved out by ρ (:func:`edge_faces`' penetration) meet beyond such an edge,
     by ρ (1/sin(α/2) − 1) for an angle α (2.2 ρ at a tetrahedron's 37°), far beyond any
-    tip that touches it, whose centre lies ρ from the edge itself."""
+    tip that touches it, whose centre lies ρ from the edge itself. Only the centres outside
+    ``poly`` are projected onto it (the others are no edge's)."""
     out = np.full(len(c), np.inf)
-    dist = np.linalg.norm(c - q, axis=1)
+    at_edge = np.zeros((len(c), len(poly.normals)), dtype=bool)
     tol = 0.05 * rho  # Dykstra's nearest points lie on their planes only so nearly
-    for i in np.flatnonzero(dist > tol):
-        on = np.flatnonzero(np.abs(poly.normals @ q[i] - poly.offsets) <= tol)
+    outside = np.flatnonzero((c @ poly.normals.T - poly.offsets).max(axis=1) > tol)
+    if len(outside) == 0:
+        return out, at_edge
+    q = nearest_points(c[outside], poly.normals, poly.offsets)
+    gaps = q @ poly.normals.T - poly.offsets
+    for i, qi, gap in zip(outside, q, gaps, strict=True):
+        on = np.flatnonzero(np.abs(gap) <= tol)
         if len(on) >= 2 and float((poly.normals[on] @ poly.normals[on].T).min()) < ACUTE_COS:
-            out[i] = rho - float(dist[i])
-    return out
+            out[i] = rho - float(np.linalg.norm(c[i] - qi))
+            at_edge[i] = np.abs(gap) <= 0.5 * rho + 1e-9
+    return out, at_edge
 
 
 def _signed_distance(x: FloatArray, normals: FloatArray, offsets: FloatArray) -> FloatArray:
