@@ -175,6 +175,12 @@ class ServoParams:
         neighbouring sensor closing while the followed one stays ON is a ripple of the same
         surface (:meth:`Controller._ripple`). Off: the paper's rules alone (a blocked slide
         ends the contour).
+    reapproach
+        A contour that a slide blocked without a sensor change ended (something the tip met
+        where no sensor faces it: a wall rising from the edge it slid along, or a scan's bump
+        too high to ride over) does not end the layers: the plane one ``z_step`` up is found
+        by a new approach, as after a contact lost below the top. Off: the paper's rule (an
+        open contour ends the layers).
     bump
         The largest irregularity (bump, ripple, relief) ridden over, metres; ``None``:
         ρ / 4 (1.25 mm for the 5 mm tip).
@@ -198,6 +204,7 @@ class ServoParams:
     top_spread: float = 0.45
     approach_margin: float = 0.01
     comply: bool = True
+    reapproach: bool = True
     bump: float | None = None
     max_motions: int = 6000
     max_layer_motions: int = 1000
@@ -371,6 +378,7 @@ class Controller:
         self.ripples = 0  # sensors closing during a slide on the same surface, turned a little
         self.dents = 0  # search cycles that found the same face again beyond a dent
         self._layer_motions = 0
+        self._blocked_end = False  # the current contour ended at a blocked slide
         self._phase = "first-contact"
         self._layer: int | None = None
         self._last_pos: Vec3 | None = None
@@ -570,6 +578,7 @@ class Controller:
                 # the contact that starts the layer belongs to it
                 self.contacts[-1] = self.contacts[-1].model_copy(update={"layer": index})
                 self._layer_motions = 0
+                self._blocked_end = False
                 start_path = len(self.path)
                 start_contacts = len(self.contacts) - 1
                 above = z + self.z_step > top - self.rho  # the next plane would be over the top
@@ -593,7 +602,25 @@ class Controller:
                     top_contacts = layer_contacts  # the top is explored over the last closed layer
                 yield "layer"
                 if not closed:
-                    break
+                    # a contour a blocked slide ended is no reason to leave the planes above
+                    # unexplored: a new first contact one z step up
+                    if (
+                        not (self.params.reapproach and self._blocked_end)
+                        or last
+                        or z + self.z_step >= top - self.rho
+                    ):
+                        break
+                    nxt = self._first_contact([z + self.z_step], quiet=True)
+                    if nxt is None:
+                        break
+                    self._note(
+                        f"the contour at z = {z:.4f} m ended open at a blocked slide: the next plane, "
+                        f"{z + self.z_step:.4f} m, was found by a new approach"
+                    )
+                    pos, follow = nxt
+                    z = float(pos[2])
+                    index += 1
+                    continue
                 if last:
                     if not above:
                         self._note(f"stopped after {self.params.max_layers} layers")
@@ -1210,6 +1237,7 @@ class Controller:
                 "blocked": "a surface blocked the slide without a sensor change",
             }
             self._note(f"contour stopped at {_fmt(m.end)}: {what.get(m.event, m.event)}")
+            self._blocked_end = m.event == "blocked"
             return False, pos, f
         self._note(f"contour budget of {p.max_layer_motions} motions exhausted")
         return False, pos, f
