@@ -130,3 +130,34 @@ def test_touches_of_a_sharp_edge_are_no_face() -> None:
     centres += [x + RHO * cut for x in on_cut]
     kept = [*faces[:-1], _face(cut, float(cut @ foot), range(start, len(centres)), False)]
     assert edge_faces(kept, np.asarray(centres), RHO) == []
+
+
+def test_a_far_closure_is_also_probed_straight_along_its_open_direction(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """The model left open towards the spike (the far-closure probes withheld during the
+    exploration) asks, after the probe of a face through the far corner, for one straight
+    along the open direction at the halfway point; that approach, from outside along the
+    direction reversed, meets the solid (a ray cast on its mesh)."""
+    mesh = _mesh()
+    withheld = completion._far_closure_probes
+    monkeypatch.setattr(completion, "_far_closure_probes", lambda model, rho: [])
+    model = build_model(completion.completing(StepperExplorer()).explore(mesh, seed=1))
+    assert model.polyhedron is None
+    assert len(model.open_points) == 1
+    probes = withheld(model, RHO)
+    straight = [p for p in probes if p.reason.endswith(", straight")]
+    assert len(straight) == 1
+    assert probes[-1] is straight[0]
+    probe = straight[0]
+    d = np.asarray(model.open_directions[0], dtype=float)
+    d /= np.linalg.norm(d)
+    assert np.allclose(probe.normal, d)
+    centres = np.asarray([c.centre for c in model.record.contacts])
+    halfway = 0.5 * (centres.mean(axis=0) + np.asarray(model.open_points[0]))
+    assert np.allclose(probe.target, halfway)
+    start = np.asarray(probe.target) + np.asarray(probe.normal) * 2.0 * probe.reach
+    hits, _, _ = mesh.ray.intersects_location([start], [-np.asarray(probe.normal)])
+    assert len(hits) > 0
+    first = float(np.linalg.norm(hits - start, axis=1).min())
+    assert first < 3.0 * probe.reach  # it meets the solid before the approach ends
