@@ -331,12 +331,13 @@ def _far_closure_probes(model: ObjectModel, rho: float) -> list[Probe]:
             break
         # then straight along the open direction at the halfway point, from outside: a face
         # the model lacks (an undercut no contour met) cuts the open region on the way
+        towards = np.asarray(d, dtype=float)
         out.append(
             Probe(
                 _v(halfway),
-                _v(np.asarray(d, dtype=float) / float(np.linalg.norm(d))),
+                _v(towards / float(np.linalg.norm(towards))),
                 0.5 * size,
-                f"the planes close far towards {_name(np.asarray(d, dtype=float))}, straight",
+                f"the planes close far towards {_name(towards)}, straight",
             )
         )
     return out

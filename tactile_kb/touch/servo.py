@@ -601,38 +601,27 @@ class Controller:
                 if closed or not top_contacts:
                     top_contacts = layer_contacts  # the top is explored over the last closed layer
                 yield "layer"
-                if not closed:
-                    # a contour a blocked slide ended is no reason to leave the planes above
-                    # unexplored: a new first contact one z step up
-                    if (
-                        not (self.params.reapproach and self._blocked_end)
-                        or last
-                        or z + self.z_step >= top - self.rho
-                    ):
-                        break
-                    nxt = self._first_contact([z + self.z_step], quiet=True)
-                    if nxt is None:
-                        break
-                    self._note(
-                        f"the contour at z = {z:.4f} m ended open at a blocked slide: the next plane, "
-                        f"{z + self.z_step:.4f} m, was found by a new approach"
-                    )
-                    pos, follow = nxt
-                    z = float(pos[2])
-                    index += 1
-                    continue
+                # a contour a blocked slide ended is no reason to leave the planes above it
+                # unexplored (``reapproach``): the next one is found by a new approach
+                blocked = not closed and self.params.reapproach and self._blocked_end
+                if not closed and not blocked:
+                    break
                 if last:
-                    if not above:
+                    if closed and not above:
                         self._note(f"stopped after {self.params.max_layers} layers")
                     break
-                nxt = self._z_increment(pos, follow, _centre(layer_contacts))
+                nxt = self._z_increment(pos, follow, _centre(layer_contacts)) if closed else None
                 if nxt is None and z + self.z_step < top - self.rho:
                     # the contact was lost below the top of the visual estimate (a step up the
-                    # object, as from an L-block's foot to its leg): a new first contact there
+                    # object, as from an L-block's foot to its leg), or the contour ended at a
+                    # blocked slide: a new first contact one z step up
                     nxt = self._first_contact([z + self.z_step], quiet=True)
                     if nxt is not None:
                         self._note(
-                            f"contact lost after the z increment to {z + self.z_step:.4f} m "
+                            f"the contour at z = {z:.4f} m ended open at a blocked slide: the "
+                            f"next plane, {z + self.z_step:.4f} m, was found by a new approach"
+                            if blocked
+                            else f"contact lost after the z increment to {z + self.z_step:.4f} m "
                             "below the top of the visual estimate: found again by a new approach"
                         )
                 if nxt is None:
