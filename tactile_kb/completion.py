@@ -306,6 +306,7 @@ def _far_closure_probes(model: ObjectModel, rho: float) -> list[Probe]:
     middle = centres.mean(axis=0)
     out: list[Probe] = []
     for d, v in zip(model.open_directions, model.open_points, strict=False):
+        towards = np.asarray(d, dtype=float)
         far = np.asarray(v, dtype=float)
         size = float(np.linalg.norm(far - middle))
         tol = max(1e-4, 1e-3 * size)
@@ -325,13 +326,12 @@ def _far_closure_probes(model: ObjectModel, rho: float) -> list[Probe]:
                     _v(spot + rho * n),
                     _v(n),
                     4.0 * rho,
-                    f"the planes close far towards {_name(np.asarray(d, dtype=float))}",
+                    f"the planes close far towards {_name(towards)}",
                 )
             )
             break
         # then straight along the open direction at the halfway point, from outside: a face
         # the model lacks (an undercut no contour met) cuts the open region on the way
-        towards = np.asarray(d, dtype=float)
         out.append(
             Probe(
                 _v(halfway),
