@@ -436,6 +436,7 @@ class _Lateral:
     edges: list[tuple[int, int]]
     points: FloatArray  # (k, 3) first vertex of each lateral edge
     directions: FloatArray  # (k, 3) unit direction of each lateral edge
+    faces: NDArray[np.intp]  # (k, 2) the polyhedron faces each lateral edge joins
 
 
 def _lateral(model: ObjectModel, name: str, horizontal_deg: float) -> _Lateral:
@@ -444,16 +445,18 @@ def _lateral(model: ObjectModel, name: str, horizontal_deg: float) -> _Lateral:
     def compute() -> _Lateral:
         base, top = _caps(model, name, horizontal_deg)
         cap = base | top
-        edges = [
-            e
-            for e, (f, g) in zip(p.edges, p.edge_faces, strict=True)
-            if f not in cap and g not in cap
+        pairs = [
+            (e, fg)
+            for e, fg in zip(p.edges, p.edge_faces, strict=True)
+            if fg[0] not in cap and fg[1] not in cap
         ]
+        edges = [e for e, _ in pairs]
         e = np.asarray(edges, dtype=int).reshape(-1, 2)
         a = p.vertices[e[:, 0]]
         d = p.vertices[e[:, 1]] - a
         d = d / np.linalg.norm(d, axis=1)[:, None]
-        return _Lateral(edges, a, d)
+        faces = np.asarray([fg for _, fg in pairs], dtype=np.intp).reshape(-1, 2)
+        return _Lateral(edges, a, d, faces)
 
     return _derived(model, (__name__, current().features, "lateral", horizontal_deg), compute)
 
@@ -1153,14 +1156,31 @@ def lateral_edges_parallel(
     tolerance_deg: float | None = None,
     horizontal_deg: float | None = None,
     min_edges: int = 3,
+    sigmas: float | None = None,
+    point_tol: float | None = None,
 ) -> bool:
-    """ "Vertical" (lateral) edges are parallel: all within ``tolerance_deg`` of their mean."""
+    """ "Vertical" (lateral) edges are parallel: all within ``tolerance_deg`` of their mean
+    axis; or, where their lines meet at no point (:func:`lateral_edges_concurrent`'s test
+    with ``point_tol`` fails), each within its own tolerance of it: the larger of
+    ``tolerance_deg`` and ``sigmas`` × the uncertainty of its direction, at most twice
+    ``tolerance_deg`` (:func:`_edge_tolerances`). The narrow walls of a many-sided prism
+    lying on one, touched a few times each, tilt their edges by more than a fixed tolerance
+    allows, and a frustum's edges, however noisy, still meet near one point."""
     tolerance_deg = _default(tolerance_deg, "tolerance_deg")
     horizontal_deg = _default(horizontal_deg, "horizontal_deg")
+    sigmas = _default(sigmas, "sigmas")
+    point_tol = _default(point_tol, "point_tol")
     _, d = _lateral_lines(model, horizontal_deg)
     if len(d) < min_edges:
         return False
-    return _lateral_spread_deg(model, horizontal_deg) <= tolerance_deg
+    if _lateral_spread_deg(model, horizontal_deg) <= tolerance_deg:
+        return True
+    if sigmas <= 0 or _meet_at_point(model, horizontal_deg, point_tol):
+        return False
+    axis = _lateral_axis(model, horizontal_deg)
+    angles = np.degrees(np.arccos(np.clip(np.abs(d @ axis), -1.0, 1.0)))
+    allowed = _edge_tolerances(model, horizontal_deg, tolerance_deg, sigmas)
+    return bool((angles <= allowed).all())
 
 
 def _lateral_spread_deg(model: ObjectModel, horizontal_deg: float) -> float:
@@ -1168,13 +1188,50 @@ def _lateral_spread_deg(model: ObjectModel, horizontal_deg: float) -> float:
 
     def compute() -> float:
         _, d = _lateral_lines(model, horizontal_deg)
-        _, vecs = np.linalg.eigh(d.T @ d)
-        axis = vecs[:, -1]
+        axis = _lateral_axis(model, horizontal_deg)
         return float(np.degrees(np.arccos(np.clip(np.abs(d @ axis).min(), -1.0, 1.0))))
 
     return _derived(
         model, (__name__, current().features, "lateral_spread", horizontal_deg), compute
     )
+
+
+def _lateral_axis(model: ObjectModel, horizontal_deg: float) -> FloatArray:
+    """The lateral edges' mean axis (the principal direction of their unit directions)."""
+
+    def compute() -> FloatArray:
+        _, d = _lateral_lines(model, horizontal_deg)
+        _, vecs = np.linalg.eigh(d.T @ d)
+        return np.asarray(vecs[:, -1], dtype=float)
+
+    return _derived(model, (__name__, current().features, "lateral_axis", horizontal_deg), compute)
+
+
+def _edge_tolerances(
+    model: ObjectModel, horizontal_deg: float, tolerance_deg: float, sigmas: float
+) -> FloatArray:
+    """Per lateral edge, the angle (degrees) its direction may stray from the edges' axis:
+    ``max(tolerance_deg, sigmas · √(u₁² + u₂²) / sin β)``, at most ``2 · tolerance_deg``,
+    for the normal uncertainties u₁, u₂ of the two faces it joins and the angle β between
+    their normals (an edge's direction turns by a normal's turn over sin β). The cap: a
+    face known from its sensors alone has an uncertainty of the sensors' spacing, which
+    would allow any direction."""
+    lat = _lateral(model, "lateral edges", horizontal_deg)
+    u = _uncertainty(model)
+    p = _poly(model, "lateral edges")
+    if len(lat.faces) == 0 or len(u) != len(p.faces):
+        return np.full(len(lat.faces), tolerance_deg)
+    a, b = lat.faces[:, 0], lat.faces[:, 1]
+    sin = np.linalg.norm(np.cross(p.normals[a], p.normals[b]), axis=1)
+    comb = np.sqrt(u[a] ** 2 + u[b] ** 2) / np.maximum(sin, 1e-6)
+    return np.asarray(np.clip(sigmas * comb, tolerance_deg, 2.0 * tolerance_deg), dtype=float)
+
+
+def _meet_at_point(model: ObjectModel, horizontal_deg: float, point_tol: float) -> bool:
+    """The lateral edge lines miss their least-squares common point by at most ``point_tol``
+    × the diameter (RMS)."""
+    found = _common_point(model, horizontal_deg)
+    return found is not None and found[1] <= point_tol * _diameter(model, "lateral edges")
 
 
 def lateral_edges_concurrent(
@@ -1191,14 +1248,10 @@ def lateral_edges_concurrent(
     tolerance_deg = _default(tolerance_deg, "tolerance_deg")
     horizontal_deg = _default(horizontal_deg, "horizontal_deg")
     _, d = _lateral_lines(model, horizontal_deg)
-    if len(d) < min_edges or lateral_edges_parallel(
-        model, tolerance_deg=tolerance_deg, horizontal_deg=horizontal_deg, min_edges=min_edges
-    ):
+    if len(d) < min_edges or not _meet_at_point(model, horizontal_deg, point_tol):
         return False
-    found = _common_point(model, horizontal_deg)
-    if found is None:
-        return False
-    return found[1] <= point_tol * _diameter(model, "lateral_edges_concurrent")
+    # meeting near a point, they are parallel only within tolerance_deg itself
+    return _lateral_spread_deg(model, horizontal_deg) > tolerance_deg
 
 
 def face_count(
