@@ -542,11 +542,12 @@ class FeatureSettings(_Group):
         "(4·√2·σ is exceeded with a probability below 1 %).",
     )
     point_tol: float = Field(
-        0.05,
+        0.1,
         gt=0,
         lt=1,
         description="Fraction of the diameter: lateral faces whose planes meet within this of one "
-        "point share a common point.",
+        "point share a common point (noisy frusta miss their apex by up to 0.065, an "
+        "octahedron's lateral edges miss any point by 0.2 or more).",
     )
     horizontal_deg: float = Field(
         10.0,

@@ -97,7 +97,7 @@ DOCUMENTED: dict[str, dict[str, float | str]] = {
         "circle_arc_deg": 90.0,
         "rel_tol": 0.06,
         "edge_sigmas": 4.0,
-        "point_tol": 0.05,
+        "point_tol": 0.1,
         "horizontal_deg": 10.0,
     },
     "grasp": {"table_angle_deg": 5.0, "table_height_tol": 0.002, "rank_angle_step_deg": 2.0},

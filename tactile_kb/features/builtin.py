@@ -33,7 +33,7 @@ parameter                      meaning                                          
 ``rel_tol``                    relative spread of lengths counted as equal          0.06
                                (edges: or within ``sigmas`` × their uncertainty,
                                ``sigmas`` = 4 for ``equal_edges``)
-``point_tol``                  RMS miss distance of concurrent lines / diameter     0.05
+``point_tol``                  RMS miss distance of concurrent lines / diameter     0.1
 ``horizontal_deg``             a face within this of ±z is the base or the top      10°
 =============================  ==================================================  =========
 
