@@ -89,3 +89,13 @@ def test_a_lying_pyramid_with_a_split_apex_is_a_pyramid(turn: float) -> None:
     assert model.polyhedron is not None
     assert miss <= 0.1 * model.polyhedron.diameter  # the rules' concurrency tolerance
     assert result.decision.label == "pyramid"
+
+
+def test_a_small_top_is_not_taken_for_a_split_apex() -> None:
+    """A slender heptagonal prism (8.5 cm high, its top's edges 13 mm) under noise: its top's
+    corners lie closer together than twice the concurrency tolerance (0.1 of the diameter),
+    but they are every corner of a face, so the top stays the top, not an apex."""
+    mesh = solids.rotate_about_z(solids.prism(7, 0.0153, 0.0853), 330.4)
+    result = classify(mesh, rules="polyhedra", noise=NOISE, seed=1, finger=builtin_finger("33"))
+    assert side_count(result.model) == 7
+    assert result.decision.label == "prism"

@@ -331,7 +331,8 @@ def _caps(model: ObjectModel, name: str, horizontal_deg: float) -> tuple[set[int
     2. else an *apex*: a vertex where all faces but one meet (a pyramid's), or a group of
        corners joined by edges no longer than 2 × ``point_tol`` × the diameter (an apex split
        by a face whose turn is known coarsely: lines that miss one point by the concurrency
-       tolerance can leave corners that far apart); the base is the face not there (among
+       tolerance can leave corners that far apart), unless the group holds every corner of
+       a face (a slender frustum's small top); the base is the face not there (among
        several, a tetrahedron's, the table face);
     3. else the faces within ``horizontal_deg`` of −z (base) and +z (top).
 
@@ -383,7 +384,8 @@ def _caps(model: ObjectModel, name: str, horizontal_deg: float) -> tuple[set[int
 
 def _near_corners(p: Polyhedron, distance: float) -> list[set[int]]:
     """The faces meeting at each group of the polyhedron's vertices joined by edges no longer
-    than ``distance`` (groups of two or more vertices only)."""
+    than ``distance`` (groups of two or more vertices only), but no group that holds every
+    corner of a face: that is a small face (a slender frustum's top), not a split apex."""
     parent = list(range(len(p.vertices)))
 
     def root(i: int) -> int:
@@ -397,10 +399,11 @@ def _near_corners(p: Polyhedron, distance: float) -> list[set[int]]:
             parent[root(int(a))] = root(int(b))
     groups: dict[int, set[int]] = {}
     sizes: Counter[int] = Counter(root(i) for i in range(len(p.vertices)))
+    whole = {root(int(poly[0])) for poly in p.faces if len({root(int(v)) for v in poly}) == 1}
     for f, poly in enumerate(p.faces):
         for v in poly:
             r = root(int(v))
-            if sizes[r] > 1:
+            if sizes[r] > 1 and r not in whole:
                 groups.setdefault(r, set()).add(f)
     return list(groups.values())
 
