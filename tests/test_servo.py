@@ -291,7 +291,13 @@ def test_z_increment_steps_round_an_overhanging_face() -> None:
 
 
 def test_new_parameters_are_checked() -> None:
-    for kwargs in ({"spacing": 0.0}, {"edge_slide": -1.0}, {"top_spread": 1.0}):
+    for kwargs in (
+        {"spacing": 0.0},
+        {"edge_slide": -1.0},
+        {"top_spread": 1.0},
+        {"top_outer": 0.4},  # inside the first diamond
+        {"top_outer": 1.0},
+    ):
         with pytest.raises(UsageError):
             ServoParams(**kwargs)  # type: ignore[arg-type]
 

@@ -164,6 +164,12 @@ class ServoParams:
     top_spread
         The slides on a top reach this fraction of the last contour's half-widths from its
         middle (a rectangle of slides, so that the top's tip centres span it).
+    top_outer
+        After that diamond, a second one reaches this fraction of the half-widths, as far as
+        the top lasts: a box's top is as wide as its contour, and tip centres spread over
+        most of it fit its plane about twice as exactly; on a smaller top (a frustum's) the
+        slide that leaves it ends the phase, its last motion not recorded. ``None``: one
+        diamond, as before.
     approach_margin
         Free space kept outside the hint box when approaching.
     comply
@@ -202,6 +208,7 @@ class ServoParams:
     probe: bool = True
     top: bool = True
     top_spread: float = 0.45
+    top_outer: float | None = 0.85
     approach_margin: float = 0.01
     comply: bool = True
     reapproach: bool = True
@@ -222,6 +229,13 @@ class ServoParams:
         if not (math.isfinite(self.top_spread) and 0.0 < self.top_spread < 1.0):
             raise UsageError(
                 f"servo parameter top_spread must lie in (0, 1), got {self.top_spread}"
+            )
+        if self.top_outer is not None and not (
+            math.isfinite(self.top_outer) and self.top_spread < self.top_outer < 1.0
+        ):
+            raise UsageError(
+                f"servo parameter top_outer must lie in (top_spread, 1) or be None, got "
+                f"{self.top_outer}"
             )
         for name in ("max_motions", "max_layer_motions", "max_layers"):
             if getattr(self, name) < 1:
@@ -1636,7 +1650,8 @@ class _TopPhase:
         """Approach from above over the middle of the last contour; slide round a diamond on it.
 
         The diamond's corners lie on the contour's principal axes at ``top_spread`` × its
-        half-widths, so that the tip centres on the top span it. A touch that cannot slide
+        half-widths, so that the tip centres on the top span it; then round a wider one at
+        ``top_outer`` × the half-widths, as far as the top lasts. A touch that cannot slide
         (an apex or an edge) is noted and not recorded as a plane.
         """
         c = self._c
@@ -1665,24 +1680,74 @@ class _TopPhase:
         a1 = np.array([vt[0, 0], vt[0, 1], 0.0])
         a2 = np.array([vt[1, 0], vt[1, 1], 0.0])
         r1, r2 = float(reach[0]), float(reach[1])
-        moved = 0.0
-        # out to the first corner of a diamond on the principal axes, then round it: the
-        # diamond lies inside the top whenever its four corners do (the top is convex)
-        corners = [a1 * r1, a2 * r2, -a1 * r1, -a2 * r2, a1 * r1]
-        legs = [(a1, r1)] + [
-            (_unit(b - a), float(np.linalg.norm(b - a))) for a, b in itertools.pairwise(corners)
-        ]
-        for direction, length in legs:
-            sm, travelled = c._slide_sampled(pos, direction, f, length)
-            moved += travelled
-            pos = np.asarray(sm.end, dtype=float)
-            if travelled > 1e-6:
-                c._record(sm, f, "slide")
-            if sm.event != "none":
-                break
+        mid3 = np.array([mid[0], mid[1], 0.0])
+        inner = [mid3 + d for d in (a1 * r1, a2 * r2, -a1 * r1, -a2 * r2)]
+        moved, at = self._diamond(pos, f, inner, inner=True)
+        if at is not None and c.params.top_outer is not None:
+            # the wider diamond, led out from the first one's corner on a1 (where the tip is)
+            # to its own: each corner top_outer of the way from the middle to where the
+            # contour's tip centres, less ρ, lie along that axis (a box's top is its contour)
+            reach_out = _ray_extents(xy, mid, [a1[:2], a2[:2], -a1[:2], -a2[:2]])
+            if reach_out is not None:
+                outer = [
+                    mid3 + a * (c.params.top_outer * max(float(t) - c.rho, 0.0))
+                    for a, t in zip((a1, a2, -a1, -a2), reach_out, strict=True)
+                ]
+                self._diamond(at, f, outer)
         if moved < c.edge_slide:
             del c.contacts[first:]
             c._note(f"the touch from above at {_fmt(m.end)} is an apex or an edge: not a plane")
+
+    def _diamond(
+        self, pos: FloatArray, f: _Follow, corners: list[FloatArray], *, inner: bool = False
+    ) -> tuple[float, FloatArray | None]:
+        """From ``pos``, slide straight to the first of the diamond's ``corners`` (their z
+        ignored: the slides follow the top), then round the diamond back to it. Returns the
+        distance slid and where the tip is when the diamond closed, None when a slide ended
+        early (the top ended, or an obstacle). That slide's last motion is recorded on the
+        ``inner`` diamond only, which lies inside the top whenever its corners do (the top
+        is convex); on the outer one it may have left the top."""
+        c = self._c
+        ring = [*corners, corners[0]]
+        lead = ring[0] - pos
+        lead[2] = 0.0
+        legs = [(lead, float(np.linalg.norm(lead)))]
+        legs += [(b - a, float(np.linalg.norm(b - a))) for a, b in itertools.pairwise(ring)]
+        moved = 0.0
+        for direction, length in legs:
+            if length < 1e-9:
+                continue
+            sm, travelled = c._slide_sampled(pos, _unit(direction), f, length)
+            moved += travelled
+            pos = np.asarray(sm.end, dtype=float)
+            if travelled > 1e-6 and (sm.event == "none" or inner):
+                c._record(sm, f, "slide")
+            if sm.event != "none":
+                return moved, None
+        return moved, pos
+
+
+def _ray_extents(
+    points: FloatArray, origin: FloatArray, directions: Sequence[FloatArray]
+) -> list[float] | None:
+    """How far from ``origin`` each ray along ``directions`` (unit, 2-D) leaves the convex
+    hull of the 2-D ``points``; None when they span no polygon."""
+    from scipy.spatial import ConvexHull, QhullError
+
+    try:
+        hull = ConvexHull(points)
+    except (QhullError, ValueError):
+        return None
+    normals, offsets = hull.equations[:, :2], -hull.equations[:, 2]  # normal · x ≤ offset
+    room = offsets - normals @ origin
+    if (room <= 0).any():
+        return None  # the origin is not inside
+    out = []
+    for d in directions:
+        rate = normals @ d
+        ahead = rate > 1e-12
+        out.append(float((room[ahead] / rate[ahead]).min()) if ahead.any() else 0.0)
+    return out
 
 
 @dataclass
