@@ -77,3 +77,26 @@ def test_a_slide_that_leaves_a_smaller_top_is_not_recorded() -> None:
         np.maximum(np.abs(centres[:, 0]), np.abs(centres[:, 1])) <= r / np.sqrt(2) * 1.0001
     ).all()
     assert result.decision.label == "frustum"
+
+
+def test_a_ridge_gets_no_wider_diamond() -> None:
+    """A pencil lying on its side (a 1 cm cylinder): the first diamond's slides stay on the
+    ridge, its tip centres along one line. A wider diamond would only lengthen that line, so
+    it is not slid: the top phase records what it did with one diamond, and the answer stays
+    curved."""
+    pencil = solids.cylinder(0.01, 0.2325)
+    side = next(n for n in pencil.face_normals if abs(n[2]) < 1e-6)
+    mesh = solids.rotate_about_z(solids.rest_on_face(pencil, tuple(side)), 65.0)
+    assert np.isclose(mesh.bounds[1, 2], 0.02, atol=1e-3)
+    tops = []
+    for outer in (None, 0.85):
+        result = classify(
+            mesh,
+            rules="polyhedra",
+            explorer=StepperExplorer(params=ServoParams(top_outer=outer)),
+            finger=builtin_finger("33"),
+        )
+        tops.append(_top_contacts(result))
+        assert result.decision.label == "curved"
+    assert len(tops[0]) == len(tops[1])
+    assert np.allclose(tops[0], tops[1])

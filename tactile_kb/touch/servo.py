@@ -165,10 +165,12 @@ class ServoParams:
         The slides on a top reach this fraction of the last contour's half-widths from its
         middle (a rectangle of slides, so that the top's tip centres span it).
     top_outer
-        After that diamond, a second one reaches this fraction of the half-widths, as far as
-        the top lasts: a box's top is as wide as its contour, and tip centres spread over
-        most of it fit its plane about twice as exactly; on a smaller top (a frustum's) the
-        slide that leaves it ends the phase, its last motion not recorded. ``None``: one
+        After that diamond, a second one reaches this fraction of the way from the middle to
+        the contour's tip centres less ρ, along the same axes: a box's top is as wide as its
+        contour, and tip centres spread over most of it fit its plane several times as
+        exactly. Its slides are kept only when it closes without riding over anything: one
+        that leaves the top (a frustum's smaller one) or rides where the top turns away
+        from the followed sensor (a lying cylinder's ridge) drops them all. ``None``: one
         diamond, as before.
     approach_margin
         Free space kept outside the hint box when approaching.
@@ -1650,8 +1652,8 @@ class _TopPhase:
         """Approach from above over the middle of the last contour; slide round a diamond on it.
 
         The diamond's corners lie on the contour's principal axes at ``top_spread`` × its
-        half-widths, so that the tip centres on the top span it; then round a wider one at
-        ``top_outer`` × the half-widths, as far as the top lasts. A touch that cannot slide
+        half-widths, so that the tip centres on the top span it; then round a wider one
+        (``top_outer``), kept only when it closes on the top without riding over anything. A touch that cannot slide
         (an apex or an edge) is noted and not recorded as a plane.
         """
         c = self._c
@@ -1683,7 +1685,7 @@ class _TopPhase:
         mid3 = np.array([mid[0], mid[1], 0.0])
         inner = [mid3 + d for d in (a1 * r1, a2 * r2, -a1 * r1, -a2 * r2)]
         moved, at = self._diamond(pos, f, inner, inner=True)
-        if at is not None and c.params.top_outer is not None:
+        if at is not None and c.params.top_outer is not None and _spans(c.contacts[first:], c.rho):
             # the wider diamond, led out from the first one's corner on a1 (where the tip is)
             # to its own: each corner top_outer of the way from the middle to where the
             # contour's tip centres, less ρ, lie along that axis (a box's top is its contour)
@@ -1693,7 +1695,12 @@ class _TopPhase:
                     mid3 + a * (c.params.top_outer * max(float(t) - c.rho, 0.0))
                     for a, t in zip((a1, a2, -a1, -a2), reach_out, strict=True)
                 ]
-                self._diamond(at, f, outer)
+                kept, rides = len(c.contacts), c.rides
+                if self._diamond(at, f, outer)[1] is None or c.rides > rides:
+                    # it left the top (a frustum's smaller one), or rode over its sensors'
+                    # turn (a lying cylinder's ridge curving away): only a whole diamond slid
+                    # with the one sensor is known to lie on one flat top
+                    del c.contacts[kept:]
         if moved < c.edge_slide:
             del c.contacts[first:]
             c._note(f"the touch from above at {_fmt(m.end)} is an apex or an edge: not a plane")
@@ -1725,6 +1732,17 @@ class _TopPhase:
             if sm.event != "none":
                 return moved, None
         return moved, pos
+
+
+def _spans(contacts: Sequence[Contact], rho: float) -> bool:
+    """The tip centres of ``contacts`` spread across their main line by at least ρ/2 (RMS):
+    they span a flat top, not a ridge (a lying cylinder's, which the diamond's slides
+    across do not leave)."""
+    if len(contacts) < 3:
+        return False
+    xyz = np.asarray([x.centre for x in contacts], dtype=float)
+    s = np.linalg.svd(xyz - xyz.mean(axis=0), compute_uv=False)
+    return bool(s[1] / math.sqrt(len(xyz)) >= 0.5 * rho)
 
 
 def _ray_extents(
