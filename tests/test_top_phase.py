@@ -4,8 +4,10 @@ The first diamond reaches ``top_spread`` (0.45) of the last contour's half-width
 the smallest top a frustum has. A box's top is as wide as its contour: the wider diamond
 (``top_outer``, 0.85) spreads the centres over most of it, and the top's plane is fitted
 several times as exactly: a 39.2 mm cube under 0.5 mm noise, turned 0–84° in 6° steps, had
-its top 1.8–3.5° off with one diamond, 0.3–1.5° with both. On a smaller top, the slide that leaves it ends the phase and
-its last motion is not recorded. The truth is the solid: its top's height and extent.
+its top 1.8–3.5° off with one diamond, 0.3–1.5° with both. The wider diamond's slides are
+kept only when it closes without riding over anything (a smaller top, a frustum's, drops
+them), and it is not slid where the first one's centres lie along a ridge (a lying
+cylinder's). The truth is the solid: its top's height and extent.
 """
 
 from __future__ import annotations
