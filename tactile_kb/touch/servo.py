@@ -1653,8 +1653,8 @@ class _TopPhase:
 
         The diamond's corners lie on the contour's principal axes at ``top_spread`` × its
         half-widths, so that the tip centres on the top span it; then round a wider one
-        (``top_outer``), kept only when it closes on the top without riding over anything. A touch that cannot slide
-        (an apex or an edge) is noted and not recorded as a plane.
+        (``top_outer``), kept only when it closes on the top without riding over anything. A
+        touch that cannot slide (an apex or an edge) is noted and not recorded as a plane.
         """
         c = self._c
         if c.finger.nearest((0.0, 0.0, -1.0)) is None:
