@@ -1684,7 +1684,8 @@ class _TopPhase:
         r1, r2 = float(reach[0]), float(reach[1])
         mid3 = np.array([mid[0], mid[1], 0.0])
         inner = [mid3 + d for d in (a1 * r1, a2 * r2, -a1 * r1, -a2 * r2)]
-        moved, at = self._diamond(pos, f, inner, inner=True)
+        # the first diamond lies inside the top whenever its corners do (the top is convex)
+        moved, at = self._diamond(pos, f, inner)
         if at is not None and c.params.top_outer is not None and _spans(c.contacts[first:], c.rho):
             # the wider diamond, led out from the first one's corner on a1 (where the tip is)
             # to its own: each corner top_outer of the way from the middle to where the
@@ -1706,14 +1707,12 @@ class _TopPhase:
             c._note(f"the touch from above at {_fmt(m.end)} is an apex or an edge: not a plane")
 
     def _diamond(
-        self, pos: FloatArray, f: _Follow, corners: list[FloatArray], *, inner: bool = False
+        self, pos: FloatArray, f: _Follow, corners: list[FloatArray]
     ) -> tuple[float, FloatArray | None]:
         """From ``pos``, slide straight to the first of the diamond's ``corners`` (their z
         ignored: the slides follow the top), then round the diamond back to it. Returns the
         distance slid and where the tip is when the diamond closed, None when a slide ended
-        early (the top ended, or an obstacle). That slide's last motion is recorded on the
-        ``inner`` diamond only, which lies inside the top whenever its corners do (the top
-        is convex); on the outer one it may have left the top."""
+        early (the top ended, or an obstacle)."""
         c = self._c
         ring = [*corners, corners[0]]
         lead = ring[0] - pos
@@ -1727,7 +1726,7 @@ class _TopPhase:
             sm, travelled = c._slide_sampled(pos, _unit(direction), f, length)
             moved += travelled
             pos = np.asarray(sm.end, dtype=float)
-            if travelled > 1e-6 and (sm.event == "none" or inner):
+            if travelled > 1e-6:
                 c._record(sm, f, "slide")
             if sm.event != "none":
                 return moved, None
