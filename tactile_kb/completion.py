@@ -248,21 +248,27 @@ def completion_probes(model: ObjectModel, *, height_gap: float | None = None) ->
         if hi_z <= lo_z:
             continue
         have = float(zs.mean()) - rho * n[2] if len(zs) else 0.5 * (lo_z + hi_z)
-        z = lo_z if abs(lo_z - have) > abs(hi_z - have) else hi_z
-        if abs(z - have) < gap:
+        # the farther end first; the nearer one is the second attempt's (the model's outline
+        # of a face touched along one line may reach where the object has another face)
+        ends = [z for z in sorted((lo_z, hi_z), key=lambda e: -abs(e - have)) if abs(z - have) >= gap]
+        if not ends:
             continue  # the face is too low for two heights
         reason = f"the face facing {_name(n)} touched at one height"
-        point = _section_point(ring, z)
-        if point is not None:
-            probes.append(Probe(_v(point + rho * n), _v(n), 4.0 * rho, reason))
+        for z in ends:
+            point = _section_point(ring, z)
+            if point is not None:
+                probes.append(Probe(_v(point + rho * n), _v(n), 4.0 * rho, reason))
         if not face.refined and float(np.hypot(n[0], n[1])) > 1e-6 and face.contacts:
             # then, if that fails: its normal is the sensors' (quantised: a scanned face's
             # bump fires two sensors and gives their mean, tilted), and so is its outline;
             # approach level where its contacts are, at the other height
             flat = np.array([n[0], n[1], 0.0]) / float(np.hypot(n[0], n[1]))
-            target = centres[list(face.contacts)].mean(axis=0)
-            target[2] = z + rho * n[2]
-            probes.append(Probe(_v(target), _v(flat), 4.0 * rho, reason + ", approached level"))
+            for z in ends:
+                target = centres[list(face.contacts)].mean(axis=0)
+                target[2] = z + rho * n[2]
+                probes.append(
+                    Probe(_v(target), _v(flat), 4.0 * rho, reason + ", approached level")
+                )
     # a face left out as concave but touched at one height: its quantised normal may be what
     # made it look concave (an overhanging side read as vertical)
     probes += _one_height_probes(model, centres, rho, gap, concave=True)
@@ -1337,7 +1343,12 @@ class ModelCompleter:
             )
         self.probes += 1
         probe = todo[0]
-        if probe.reason == "open towards +z" and self._tried[probe.reason]:
+        ends = [p for p in todo if p.reason == probe.reason]
+        if len(ends) > 1 and self._tried[probe.reason] and last is not None and last[1]:
+            # a face's other height, again: the last attempt touched, but not this face there
+            # (the model's outline reached into another face); the other end of the face
+            probe = ends[self._tried[probe.reason] % len(ends)]
+        elif probe.reason == "open towards +z" and self._tried[probe.reason]:
             probe = _over_the_rim(record, probe)
         elif probe.reason.startswith("open towards") and self._tried[probe.reason]:
             probe = _at_the_far_touches(record, probe)
