@@ -1269,6 +1269,7 @@ class ModelCompleter:
         self._spot_probes = 0
         self.probes = 0
         self._last: tuple[str, ObjectModel] | None = None
+        self._asked: dict[str, list[Probe]] = {}
 
     def _budget(self, record: ExplorationRecord, model: ObjectModel) -> tuple[int, float]:
         """The completion's touch and path budgets for ``record``."""
@@ -1313,6 +1314,16 @@ class ModelCompleter:
             open_items = [model.open_reason or "the model is open"]
         attempts = self.params.budget()[2]
         todo = [p for p in wanted if self._tried[p.reason] < attempts]
+        probe: Probe | None = None
+        while todo:
+            probe = self._choose(todo, record, last)
+            if not self._asked_before(probe, record.tip_radius):
+                break
+            # the same approach again would touch what it touched before: it counts as
+            # tried, and the next attempt (another end, another item) goes instead
+            self._tried[probe.reason] += 1
+            probe = None
+            todo = [p for p in wanted if self._tried[p.reason] < attempts]
         touches = record.touches - self._start[0]
         path = record.path_length - self._start[1]
         if not open_items and (not wanted or self._spent(record, model)):
@@ -1321,7 +1332,7 @@ class ModelCompleter:
                 f"the model is closed and every side face has tip centres at two heights "
                 f"({record.touches} touches, {touches} of them by the completion)",
             )
-        if not todo:
+        if probe is None:
             what = (
                 "the model stayed open"
                 if model.polyhedron is None
@@ -1342,24 +1353,8 @@ class ModelCompleter:
                 tuple(open_items),
             )
         self.probes += 1
-        probe = todo[0]
-        ends = [p for p in todo if p.reason == probe.reason]
-        if len(ends) > 1 and self._tried[probe.reason] and last is not None and last[1]:
-            # a face's other height, again: the last attempt touched, but not this face there
-            # (the model's outline reached into another face); the other end of the face
-            probe = ends[self._tried[probe.reason] % len(ends)]
-        elif probe.reason == "open towards +z" and self._tried[probe.reason]:
-            probe = _over_the_rim(record, probe)
-        elif probe.reason.startswith("open towards") and self._tried[probe.reason]:
-            probe = _at_the_far_touches(record, probe)
-        elif (
-            self._tried[probe.reason]
-            and last is not None
-            and not last[1]
-            and abs(probe.normal[2]) < 0.9
-        ):
-            probe = _nearer_the_touches(record, probe)
         self._tried[probe.reason] += 1
+        self._asked.setdefault(probe.reason, []).append(probe)
         if probe.reason.startswith(_CORNER):
             self._corner_probes += 1
         elif probe.reason.startswith(_SPOT):
@@ -1367,6 +1362,35 @@ class ModelCompleter:
         elif probe.reason.startswith(_TESTS):
             self._path_probes += 1
         return probe
+
+    def _choose(
+        self, todo: list[Probe], record: ExplorationRecord, last: tuple[Probe, bool] | None
+    ) -> Probe:
+        """The first of ``todo``, moved for its second attempt by what the first met."""
+        probe = todo[0]
+        tried = self._tried[probe.reason]
+        ends = [p for p in todo if p.reason == probe.reason]
+        if len(ends) > 1 and tried and last is not None and last[1]:
+            # a face's other height, again: the last attempt touched, but not this face there
+            # (the model's outline reached into another face); the other end of the face
+            return ends[tried % len(ends)]
+        if probe.reason == "open towards +z" and tried:
+            return _over_the_rim(record, probe)
+        if probe.reason.startswith("open towards") and tried:
+            return _at_the_far_touches(record, probe)
+        if tried and last is not None and not last[1] and abs(probe.normal[2]) < 0.9:
+            return _nearer_the_touches(record, probe)
+        return probe
+
+    def _asked_before(self, probe: Probe, rho: float) -> bool:
+        """Whether an earlier attempt for the same item approached the same point the same
+        way (within a tenth of the tip radius and a degree)."""
+        for p in self._asked.get(probe.reason, []):
+            near = math.dist(p.target, probe.target) < 0.1 * rho
+            same = float(np.dot(p.normal, probe.normal)) > math.cos(math.radians(1.0))
+            if near and same and p.facing == probe.facing:
+                return True
+        return False
 
     def _model(self, record: ExplorationRecord) -> ObjectModel:
         """``build_model(record)``; the last model again (with ``record``) when a probe
