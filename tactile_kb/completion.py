@@ -1213,12 +1213,25 @@ def _at_the_far_touches(record: ExplorationRecord, probe: Probe) -> Probe:
     the height where the touches went furthest."""
     d = np.asarray(probe.normal, dtype=float)
     centres = np.asarray([c.centre for c in record.contacts], dtype=float).reshape(-1, 3)
-    z = float(centres[int(np.argmax(centres @ d)), 2])
-    if abs(z - probe.target[2]) < record.tip_radius:
+    far = centres[int(np.argmax(centres @ d))]
+    if abs(float(far[2]) - probe.target[2]) >= record.tip_radius:
+        return Probe(
+            (probe.target[0], probe.target[1], float(far[2])),
+            probe.normal,
+            probe.reach,
+            probe.reason,
+            middle=True,
+        )
+    # at that height already: the middle of the hint box may be where the object is not (the
+    # notch of an L-block lying on its arms). Behind a point touched on a face facing the
+    # other way the object is solid: approach the open side in line with it
+    points = np.asarray([c.point for c in record.contacts], dtype=float).reshape(-1, 3)
+    normals = -np.asarray([c.direction for c in record.contacts], dtype=float).reshape(-1, 3)
+    back = points[normals @ d <= -math.cos(math.radians(45.0))]
+    if not len(back):
         return probe
-    return Probe(
-        (probe.target[0], probe.target[1], z), probe.normal, probe.reach, probe.reason, middle=True
-    )
+    point = back[int(np.argmin(np.linalg.norm(back - back.mean(axis=0), axis=1)))]
+    return Probe(_v(point), probe.normal, probe.reach, probe.reason)
 
 
 def _nearer_the_touches(record: ExplorationRecord, probe: Probe) -> Probe:
