@@ -1383,10 +1383,14 @@ class ModelCompleter:
         probe = todo[0]
         tried = self._tried[probe.reason]
         ends = [p for p in todo if p.reason == probe.reason]
-        if len(ends) > 1 and tried and last is not None and last[1]:
+        if len(ends) > 1 and last is not None and last[0].reason == probe.reason and last[1]:
             # a face's other height, again: the last attempt touched, but not this face there
-            # (the model's outline reached into another face); the other end of the face
-            return ends[tried % len(ends)]
+            # (the model's outline reached into another face); the end of the face farthest
+            # from where the attempts so far went
+            before = self._asked.get(probe.reason, [])
+            return max(
+                ends, key=lambda p: min((math.dist(p.target, q.target) for q in before), default=0.0)
+            )
         if probe.reason == "open towards +z" and tried:
             return _over_the_rim(record, probe)
         if probe.reason.startswith("open towards") and tried:
