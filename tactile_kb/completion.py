@@ -250,7 +250,9 @@ def completion_probes(model: ObjectModel, *, height_gap: float | None = None) ->
         have = float(zs.mean()) - rho * n[2] if len(zs) else 0.5 * (lo_z + hi_z)
         # the farther end first; the nearer one is the second attempt's (the model's outline
         # of a face touched along one line may reach where the object has another face)
-        ends = [z for z in sorted((lo_z, hi_z), key=lambda e: -abs(e - have)) if abs(z - have) >= gap]
+        ends = [
+            z for z in sorted((lo_z, hi_z), key=lambda e: -abs(e - have)) if abs(z - have) >= gap
+        ]
         if not ends:
             continue  # the face is too low for two heights
         reason = f"the face facing {_name(n)} touched at one height"
@@ -266,9 +268,7 @@ def completion_probes(model: ObjectModel, *, height_gap: float | None = None) ->
             for z in ends:
                 target = centres[list(face.contacts)].mean(axis=0)
                 target[2] = z + rho * n[2]
-                probes.append(
-                    Probe(_v(target), _v(flat), 4.0 * rho, reason + ", approached level")
-                )
+                probes.append(Probe(_v(target), _v(flat), 4.0 * rho, reason + ", approached level"))
     # a face left out as concave but touched at one height: its quantised normal may be what
     # made it look concave (an overhanging side read as vertical)
     probes += _one_height_probes(model, centres, rho, gap, concave=True)
@@ -1389,7 +1389,8 @@ class ModelCompleter:
             # from where the attempts so far went
             before = self._asked.get(probe.reason, [])
             return max(
-                ends, key=lambda p: min((math.dist(p.target, q.target) for q in before), default=0.0)
+                ends,
+                key=lambda p: min((math.dist(p.target, q.target) for q in before), default=0.0),
             )
         if probe.reason == "open towards +z" and tried:
             return _over_the_rim(record, probe)
