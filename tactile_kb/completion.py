@@ -1330,10 +1330,11 @@ class ModelCompleter:
         probe: Probe | None = None
         while todo:
             probe = self._choose(todo, record, last)
-            if not self._asked_before(probe, record.tip_radius):
+            if record.noise > 0 or not self._asked_before(probe, record.tip_radius):
                 break
-            # the same approach again would touch what it touched before: it counts as
-            # tried, and the next attempt (another end, another item) goes instead
+            # with exact contacts the same approach again would touch what it touched
+            # before: it counts as tried, and the next attempt (another end, another item)
+            # goes instead (under noise it is another sample of the same spot)
             self._tried[probe.reason] += 1
             probe = None
             todo = [p for p in wanted if self._tried[p.reason] < attempts]

@@ -65,8 +65,8 @@ def test_planes_closing_far_name_the_far_vertex() -> None:
 def test_the_completion_probes_on_the_way_to_a_far_corner(
     noise: float, monkeypatch: pytest.MonkeyPatch
 ) -> None:
-    """Without the far-closure probes the model stays open towards the spike (the probes
-    from that side meet the sloping top again); with them it closes with the solid's four
+    """Without the far-closure probes the exact model stays open towards the spike (the
+    probes from that side meet the sloping top again); with them it closes with the solid's four
     planes and the answer is a tetrahedron."""
     mesh = _mesh()
     normals, _, _ = _planes()
@@ -78,6 +78,10 @@ def test_the_completion_probes_on_the_way_to_a_far_corner(
     for n in poly.normals:  # every modelled face is one of the solid's
         assert float((normals @ n).max()) > np.cos(np.radians(3.0))
 
+    if noise:
+        # under noise the open side's second attempt, in line with a point touched on the
+        # face opposite (tests/test_completion_attempts.py), closes it as well
+        return
     monkeypatch.setattr(completion, "_far_closure_probes", lambda model, rho: [])
     rec = completion.completing(StepperExplorer()).explore(mesh, seed=1, noise=noise)
     model = build_model(rec)
