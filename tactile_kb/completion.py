@@ -23,6 +23,12 @@ it, where the visual hint reaches beyond it, and at corners that jut out from th
 points: :func:`corner_probes`) are each tried once, within the same budget, and never hold
 the completion open.
 
+An item's second attempt learns from the first (:meth:`ModelCompleter._choose`): a face's
+other height goes to the end farthest from the first attempt when that touched something
+else; an open side is approached at the height, then in line with a point, where the object
+surely is; a probe that found nothing moves halfway to the touches. With exact contacts the
+same approach is never asked for twice (it would touch what it touched before).
+
 The record says which happened (``record.ending``, ``record.unreachable`` and a note). The
 controller computes no geometry: it carries out probes given as plain values; this module,
 above it, computes them from the model.
@@ -1210,7 +1216,9 @@ def _at_the_far_touches(record: ExplorationRecord, probe: Probe) -> Probe:
     """``probe`` (towards an open side) again, at the height of the touch that reached
     furthest that way: the first, at the middle of the touched heights, met what was there
     already (the face above an L-block's foot, concave), and the part still open lies at
-    the height where the touches went furthest."""
+    the height where the touches went furthest. When the first was at that height already,
+    the second approaches in line with a point touched on a face facing the other way (the
+    middle of the hint box may be empty: the notch of an L-block lying on its arms)."""
     d = np.asarray(probe.normal, dtype=float)
     centres = np.asarray([c.centre for c in record.contacts], dtype=float).reshape(-1, 3)
     far = centres[int(np.argmax(centres @ d))]
@@ -1222,9 +1230,8 @@ def _at_the_far_touches(record: ExplorationRecord, probe: Probe) -> Probe:
             probe.reason,
             middle=True,
         )
-    # at that height already: the middle of the hint box may be where the object is not (the
-    # notch of an L-block lying on its arms). Behind a point touched on a face facing the
-    # other way the object is solid: approach the open side in line with it
+    # behind a point touched on a face facing the other way the object is solid: the one
+    # nearest the middle of those points
     points = np.asarray([c.point for c in record.contacts], dtype=float).reshape(-1, 3)
     normals = -np.asarray([c.direction for c in record.contacts], dtype=float).reshape(-1, 3)
     back = points[normals @ d <= -math.cos(math.radians(45.0))]

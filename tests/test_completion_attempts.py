@@ -5,9 +5,9 @@ an open side approached where the object surely is.
   equator) is probed at another height. When that attempt touches something else (the model's
   outline of the face reaches into a neighbour), the second goes to the end of the face
   farthest from it, not to the same spot again.
-* An approach asked for again the same way (same item, same point within ρ/10, same direction
-  within 1°) would touch what it touched before: it counts as tried and the next item goes
-  instead. A hexagonal pyramid lying on a side asked for two such repeats in four of its
+* With exact contacts, an approach asked for again the same way (same item, same point within
+  ρ/10, same direction within 1°) would touch what it touched before: it counts as tried and
+  the next item goes instead. (Under noise it is another sample of the spot, and is made.) A hexagonal pyramid lying on a side asked for two such repeats in four of its
   turns, a large lying hexagonal frustum in every turn; its completion then ran out of touches
   (``benchmarks/bench_poses.py``, seed 1, the only exact miss).
 * An L block lying on the ends of its arms (an upturned V) is open at its back. The first
