@@ -1355,6 +1355,9 @@ def equal_edges(
 ) -> bool:
     """Distances between neighbouring vertices are equal: every two edge lengths differ by at
     most ``max(rel_tol · mean, sigmas · √(σ₁² + σ₂²))``, σ from :func:`edge_uncertainties`.
+    An edge no longer than ``sigmas`` σ is a corner that noisy planes split (four faces of an
+    octahedron meet at each corner, and four noisy planes meet in no one point), not an edge
+    (:func:`_split_corners`).
 
     False on a model closed by an assumed top (``model.assumed_top``): the lateral edges'
     true length is unknown."""
@@ -1366,6 +1369,10 @@ def equal_edges(
         return False
     lengths = _derived(model, (__name__, current().features, "edge_lengths"), p.edge_lengths)
     sig = _edge_sigmas(model)
+    kept = ~_split_corners(model, sigmas)
+    lengths, sig = lengths[kept], sig[kept]
+    if not len(lengths):
+        return False
     diff = np.abs(lengths[:, None] - lengths[None, :])
     allowed = np.maximum(
         rel_tol * lengths.mean(), sigmas * np.sqrt(sig[:, None] ** 2 + sig[None, :] ** 2)
@@ -1373,15 +1380,57 @@ def equal_edges(
     return bool((diff <= allowed).all())
 
 
-def _congruence(p: Polyhedron) -> tuple[bool, float, float, float]:
-    """How far the faces are from congruent with the first: ``(same number of sides, largest
-    difference of a sorted side length, largest difference of a sorted corner angle in
-    degrees, mean side length)``."""
-    counts = np.asarray([len(f) for f in p.faces], dtype=np.intp)
-    if (counts != counts[0]).any():
-        return False, math.inf, math.inf, 0.0
-    c = int(counts[0])
-    v = p.vertices[np.asarray(p.faces, dtype=np.intp)]  # (F, c, 3): faces' corners in order
+def _split_corners(model: ObjectModel, sigmas: float) -> NDArray[np.bool_]:
+    """(E,) whether each polyhedron edge is a split corner: no longer than ``sigmas`` times its
+    length's uncertainty (:func:`edge_uncertainties`), so indistinguishable from none. Where
+    more than three faces meet, noisy planes meet in no one point and leave such an edge.
+    Exact planes split nothing."""
+    p = _poly(model, "edge_uncertainties")
+    lengths = _derived(model, (__name__, current().features, "edge_lengths"), p.edge_lengths)
+    return np.asarray(lengths <= sigmas * _edge_sigmas(model), dtype=bool)
+
+
+def _face_cycles(model: ObjectModel, sigmas: float) -> list[list[int]]:
+    """Each polyhedron face's corners in order, a split corner's two ends counted once."""
+    p = _poly(model, "congruent_faces")
+    split = _split_corners(model, sigmas)
+    index = {tuple(sorted(e)): i for i, e in enumerate(p.edges)}
+    cycles = []
+    for face in p.faces:
+        ring = [int(v) for v in face]
+        kept = [
+            v
+            for v, w in zip(ring, ring[1:] + ring[:1], strict=True)
+            if not split[index[(min(v, w), max(v, w))]]
+        ]
+        cycles.append(kept or ring[:1])
+    return cycles
+
+
+def _congruence(
+    model: ObjectModel, sigmas: float
+) -> tuple[bool, FloatArray, FloatArray, float, float]:
+    """How far the faces are from congruent with the first: ``(same number of sides,
+    differences of the sorted side lengths (F − 1, sides), their uncertainty (F − 1,),
+    largest difference of a sorted corner angle in degrees, mean side length)``. Corners that
+    noise split count once (:func:`_split_corners`); a face's side length is as uncertain as
+    its most uncertain edge (:func:`edge_uncertainties`), and two faces' in quadrature."""
+    p = _poly(model, "congruent_faces")
+    cycles = _face_cycles(model, sigmas)
+    counts = np.asarray([len(f) for f in cycles], dtype=np.intp)
+    none = np.zeros((0, 0)), np.zeros(0)
+    if (counts != counts[0]).any() or counts[0] < 3:
+        return False, *none, math.inf, 0.0
+    sig = _edge_sigmas(model)
+    index = {tuple(sorted(e)): i for i, e in enumerate(p.edges)}
+    face_sigma = np.asarray(
+        [
+            max(sig[index[(min(v, w), max(v, w))]] for v, w in zip(f, f[1:] + f[:1], strict=True))
+            for f in ([int(v) for v in face] for face in p.faces)
+        ],
+        dtype=float,
+    )
+    v = p.vertices[np.asarray(cycles, dtype=np.intp)]  # (F, c, 3): faces' corners in order
     nxt = np.roll(v, -1, axis=1)
     prv = np.roll(v, 1, axis=1)
     a, b = nxt - v, prv - v
@@ -1391,27 +1440,35 @@ def _congruence(p: Polyhedron) -> tuple[bool, float, float, float]:
     lengths.sort(axis=1)
     angles.sort(axis=1)
     scale = float(np.mean(lengths.mean(axis=1)))
-    if len(counts) < 2 or c == 0:
-        return True, 0.0, 0.0, scale
-    dl = float(np.abs(lengths[1:] - lengths[0]).max())
+    if len(counts) < 2:
+        return True, *none, 0.0, scale
+    diffs = np.abs(lengths[1:] - lengths[0])
+    pair = np.hypot(face_sigma[1:], face_sigma[0])
     da = float(np.abs(angles[1:] - angles[0]).max())
-    return True, dl, da, scale
+    return True, diffs, pair, da, scale
 
 
 def congruent_faces(
     model: ObjectModel, *, rel_tol: float | None = None, tolerance_deg: float | None = None
 ) -> bool:
     """All faces are congruent: same number of sides, side lengths and angles (False on a
-    model closed by an assumed top, whose lateral faces' height is unknown)."""
+    model closed by an assumed top, whose lateral faces' height is unknown). Side lengths
+    may differ by ``rel_tol`` of the mean side or by ``features.edge_sigmas`` times their
+    uncertainty, whichever is more (as in :func:`equal_edges`), and corners that noise split
+    count once (:func:`_congruence`)."""
     rel_tol = _default(rel_tol, "rel_tol")
     tolerance_deg = _default(tolerance_deg, "tolerance_deg")
-    p = _poly(model, "congruent_faces")
+    sigmas = current().features.edge_sigmas
+    _poly(model, "congruent_faces")
     if model.assumed_top is not None:
         return False
-    same, dl, da, scale = _derived(
-        model, (__name__, current().features, "congruence"), lambda: _congruence(p)
+    same, diffs, pair, da, scale = _derived(
+        model,
+        (__name__, current().features, "congruence"),
+        lambda: _congruence(model, sigmas),
     )
-    return same and not (dl > rel_tol * scale or da > tolerance_deg)
+    allowed = np.maximum(rel_tol * scale, sigmas * pair)[:, None]
+    return same and bool((diffs <= allowed).all()) and da <= tolerance_deg
 
 
 def top_face(model: ObjectModel, *, horizontal_deg: float | None = None) -> bool:
