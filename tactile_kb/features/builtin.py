@@ -1390,21 +1390,33 @@ def _split_corners(model: ObjectModel, sigmas: float) -> NDArray[np.bool_]:
     return np.asarray(lengths <= sigmas * _edge_sigmas(model), dtype=bool)
 
 
-def _face_cycles(model: ObjectModel, sigmas: float) -> list[list[int]]:
-    """Each polyhedron face's corners in order, a split corner's two ends counted once."""
+def _face_cycles(model: ObjectModel, sigmas: float) -> tuple[list[list[int]], FloatArray]:
+    """Each polyhedron face's corners in order, and the corners' positions: the two ends of
+    a split corner (:func:`_split_corners`) are one corner, at their middle."""
     p = _poly(model, "congruent_faces")
     split = _split_corners(model, sigmas)
-    index = {tuple(sorted(e)): i for i, e in enumerate(p.edges)}
+    group = list(range(len(p.vertices)))
+
+    def root(v: int) -> int:
+        while group[v] != v:
+            v = group[v]
+        return v
+
+    for (a, b), joined in zip(p.edges, split, strict=True):
+        if joined:
+            group[root(int(b))] = root(int(a))
+    roots = sorted({root(v) for v in range(len(p.vertices))})
+    number = {r: i for i, r in enumerate(roots)}
+    corner = np.asarray([number[root(v)] for v in range(len(p.vertices))], dtype=np.intp)
+    sums = np.zeros((len(roots), 3))
+    np.add.at(sums, corner, p.vertices)
+    positions = sums / np.bincount(corner, minlength=len(roots))[:, None]
     cycles = []
     for face in p.faces:
-        ring = [int(v) for v in face]
-        kept = [
-            v
-            for v, w in zip(ring, ring[1:] + ring[:1], strict=True)
-            if not split[index[(min(v, w), max(v, w))]]
-        ]
+        ring = [int(corner[int(v)]) for v in face]
+        kept = [c for c, d in zip(ring, ring[1:] + ring[:1], strict=True) if c != d]
         cycles.append(kept or ring[:1])
-    return cycles
+    return cycles, np.asarray(positions, dtype=float)
 
 
 def _congruence(
@@ -1416,7 +1428,7 @@ def _congruence(
     noise split count once (:func:`_split_corners`); a face's side length is as uncertain as
     its most uncertain edge (:func:`edge_uncertainties`), and two faces' in quadrature."""
     p = _poly(model, "congruent_faces")
-    cycles = _face_cycles(model, sigmas)
+    cycles, corners = _face_cycles(model, sigmas)
     counts = np.asarray([len(f) for f in cycles], dtype=np.intp)
     none = np.zeros((0, 0)), np.zeros(0)
     if (counts != counts[0]).any() or counts[0] < 3:
@@ -1430,7 +1442,7 @@ def _congruence(
         ],
         dtype=float,
     )
-    v = p.vertices[np.asarray(cycles, dtype=np.intp)]  # (F, c, 3): faces' corners in order
+    v = corners[np.asarray(cycles, dtype=np.intp)]  # (F, c, 3): faces' corners in order
     nxt = np.roll(v, -1, axis=1)
     prv = np.roll(v, 1, axis=1)
     a, b = nxt - v, prv - v
