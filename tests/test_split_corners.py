@@ -83,7 +83,8 @@ def test_exact_planes_split_nothing_and_a_pulled_corner_stays_apart() -> None:
     finger = builtin_finger("33")
     exact = build_model(sample_record(octahedron, finger, per_face=10, noise=0.0, seed=3))
     assert (edge_uncertainties(exact) < 1e-9).all()  # exact planes: no split to speak of
-    assert congruent_faces(exact) and equal_edges(exact)
+    assert congruent_faces(exact)
+    assert equal_edges(exact)
     for noise in (0.0, NOISE):
         model = build_model(sample_record(pulled, finger, per_face=10, noise=noise, seed=3))
         assert not congruent_faces(model)
