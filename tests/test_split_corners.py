@@ -3,7 +3,7 @@
 Four faces of an octahedron meet at each corner. Four noisy planes meet in no one point, so
 the modelled polyhedron may have a short edge where the solid has a corner, and two of its
 faces become quadrilaterals. A 3 cm octahedron under 0.5 mm noise (``benchmarks/
-bench_poses.py`` seed 2 drew one: 8 of its 21 noisy poses were "a polyhedron of another
+bench_poses.py`` seed 2 drew one: 8 of its 24 noisy cases were "a polyhedron of another
 kind") also has side lengths that differ by up to 3 mm, beyond the fixed 6 % (1.8 mm), though
 within four times their own uncertainties (each 0.6–1.9 mm, ``edge_uncertainties``).
 
