@@ -271,8 +271,9 @@ def completion_probes(model: ObjectModel, *, height_gap: float | None = None) ->
             # bump fires two sensors and gives their mean, tilted), and so is its outline;
             # approach level where its contacts are, at the other height
             flat = np.array([n[0], n[1], 0.0]) / float(np.hypot(n[0], n[1]))
+            touched = centres[list(face.contacts)].mean(axis=0)
             for z in ends:
-                target = centres[list(face.contacts)].mean(axis=0)
+                target = touched.copy()
                 target[2] = z + rho * n[2]
                 probes.append(Probe(_v(target), _v(flat), 4.0 * rho, reason + ", approached level"))
     # a face left out as concave but touched at one height: its quantised normal may be what
