@@ -104,6 +104,12 @@ PERSIST_TRIES = DEFAULTS.servo.persist_tries
 on, each time twice as far (0.8, 1.6, 3.2 tip radii), before the contour ends."""
 
 
+UNDER_DEPTH = 3.0
+"""How much deeper than a slide ran (in :attr:`Controller.bump`) the face it followed may lie one
+tip radius lower (a dent, or a face sloped by up to 15°) before an opening under the edge is
+looked for (:meth:`Controller._under_edge`)."""
+
+
 def _through_releases(
     move: Callable[[FloatArray, FloatArray, float], Motion],
     pos: FloatArray,
@@ -393,6 +399,8 @@ class Controller:
         self.persisted = 0  # blocked slides after which the surface was re-acquired
         self.ripples = 0  # sensors closing during a slide on the same surface, turned a little
         self.dents = 0  # search cycles that found the same face again beyond a dent
+        self.openings = 0  # openings found under the edge a ride came back on
+        self._looking_under = False
         self._layer_motions = 0
         self._blocked_end = False  # the current contour ended at a blocked slide
         self._phase = "first-contact"
@@ -568,6 +576,11 @@ class Controller:
             + (
                 [f"{self.persisted} blocked slide(s) followed by re-acquiring the surface"]
                 if self.persisted
+                else []
+            )
+            + (
+                [f"{self.openings} opening(s) found under the rim a ride came back on"]
+                if self.openings
                 else []
             ),
             ending=self.ending.status if self.ending else "",
@@ -1111,7 +1124,106 @@ class Controller:
             f.sensor, f.group, f.r0 = nf.sensor, nf.group, nf.r0
         self._record(regained, f, "slide")
         end = np.asarray(regained.end, dtype=float)
+        if m.event == "release":
+            self._under_edge(end, r0, ahead)
         return end, max(0.0, float((end - np.asarray(m.end, dtype=float)) @ ahead))
+
+    def _under_edge(self, pos: FloatArray, press: FloatArray, ahead: FloatArray) -> None:
+        """Look under the edge a ride came back on: is the face followed there one tip radius
+        lower, or does an opening (a U-block's tunnel, a slot) lie under that edge?
+
+        A side face that fell away under the followed sensor and came back a step on may have
+        been a dent, or the mouth of an opening whose upper rim lies less than ρ above the tip's
+        centre: the tip, too tall for it, met the rim with its upper half and took it for the
+        face. From ``pos`` (on the rim, in a layer, the finger vertical) the finger backs off by
+        :attr:`bump`, goes down by ρ and presses back up to :data:`UNDER_DEPTH` ``bump`` deeper
+        than the slide ran. The face met there with sensors facing ``press`` (within
+        :data:`RIDE_DEG`) was a dent: nothing is recorded. Otherwise the opening's side is
+        found: a corner touched with sensors turned sideways says on which side the opening's
+        wall stands (none touched: the side the slide came from); the finger enters the opening
+        wholly, beside that wall, and moves towards it; the wall it touches is recorded as a
+        touch (a face inside the envelope: the object is not convex) and slid along inwards.
+        The finger then goes back to ``pos`` the way it came, and the slide goes on. Nothing
+        is looked for where the tip would meet the table, on a sloped face, or with the head
+        indexed.
+        """
+        if (
+            self._phase != "layers"
+            or self._looking_under
+            or not self.orientation.vertical
+            or abs(float(press[2])) > 0.05
+        ):
+            return
+        lo = float(self.world.hint.lo[2])
+        if float(pos[2]) - 2.0 * self.rho < lo + self.bump:
+            return
+        press = _unit(np.array([press[0], press[1], 0.0]))
+        side = _unit(np.array([ahead[0], ahead[1], 0.0]))
+        side = _unit(side - (side @ press) * press)
+        legs: list[tuple[FloatArray, float]] = []
+        here = np.asarray(pos, dtype=float)
+
+        def go(direction: FloatArray, length: float, *, rigid: bool = False) -> Motion:
+            nonlocal here
+            m = (self._move if rigid else self._move_on)(here, direction, length)
+            legs.append((-direction, m.distance))
+            here = np.asarray(m.end, dtype=float)
+            return m
+
+        self._looking_under = True
+        try:
+            if go(-press, self.bump).event not in ("none", "release"):
+                return
+            if go(-_Z, self.rho).event not in ("none", "release"):
+                return
+            below = go(press, (1.0 + UNDER_DEPTH) * self.bump, rigid=True)
+            if below.event == "blocked":
+                return
+            wall = -side  # the slide came from there: the opening began behind
+            if below.event == "touch":
+                dirs = self._dirs[list(below.closed or below.fired)]
+                mean = _unit(dirs.sum(axis=0))
+                if float(mean @ press) >= math.cos(math.radians(current().servo.ride_deg)):
+                    return  # the face is there one tip radius lower: a dent
+                lateral = float(mean @ side)
+                if abs(lateral) < math.sin(math.radians(current().servo.ride_deg)):
+                    return  # a rim above or below, not a side: too low an opening for the tip
+                wall = side if lateral > 0 else -side
+                # off the corner, far enough sideways for the whole tip to pass it
+                if go(-press, self.bump).event not in ("none", "release"):
+                    return
+                if go(-wall, self.rho * (1.0 - abs(lateral)) + self.bump).event != "none":
+                    return
+            inside = go(press, 2.0 * self.rho + (1.0 + UNDER_DEPTH) * self.bump, rigid=True)
+            if inside.event != "none":
+                return
+            hit = go(wall, 2.0 * self.rho + current().servo.ride_step * self.rho, rigid=True)
+            if hit.event != "touch" or not hit.closed:
+                return
+            f = self._follow(hit.closed)
+            if float(f.r0 @ wall) < math.cos(math.radians(current().servo.ride_deg)):
+                return  # not a wall square to the way there: an edge or a corner inside
+            self.openings += 1
+            self._record(hit, f, "touch")
+            slid = 0.0
+            while slid < self.rho - 1e-9:  # along the wall, inwards: the wall's plane
+                run = self._slide(here, press, min(self.spacing, self.rho - slid), f.sensor)
+                step = float((np.asarray(run.end, dtype=float) - here) @ press)
+                slid += step
+                here = np.asarray(run.end, dtype=float)
+                if run.event != "none" or step <= 1e-9:
+                    break
+                self._record(run, f, "slide")
+            # off the wall, then back the way the finger came
+            off = self._move(here, -wall, self.bump)
+            here = np.asarray(off.end, dtype=float)
+            legs[-1] = (legs[-1][0], max(0.0, legs[-1][1] - off.distance))
+            legs.append((-press, slid))
+        finally:
+            for direction, length in reversed(legs):
+                if length > 1e-12:
+                    here = np.asarray(self._move(here, direction, length).end, dtype=float)
+            self._looking_under = False
 
     def _same_surface(self, m: Motion, f: _Follow, press: FloatArray) -> bool:
         """Whether a touch while riding is the followed surface again: the followed sensor
