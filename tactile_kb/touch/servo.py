@@ -401,6 +401,8 @@ class Controller:
         self.dents = 0  # search cycles that found the same face again beyond a dent
         self.openings = 0  # openings found under the edge a ride came back on
         self._looking_under = False
+        self._risen: list[FloatArray] = []  # followed directions risen along in this layer
+        self._planned: list[float] = []  # the heights of the layers to come
         self._layer_motions = 0
         self._blocked_end = False  # the current contour ended at a blocked slide
         self._phase = "first-contact"
@@ -612,6 +614,7 @@ class Controller:
                 start_contacts = len(self.contacts) - 1
                 above = z + self.z_step > top - self.rho  # the next plane would be over the top
                 last = above or index + 1 >= self.params.max_layers
+                self._risen, self._planned = [], [] if last else [z + self.z_step]
                 closed, pos, follow = self._contour(pos, follow, last=last)
                 layer_path = self.path[start_path - 1 if start_path else 0 :]
                 self._finish_layer(index, z, layer_path, closed)
@@ -1128,6 +1131,92 @@ class Controller:
             self._under_edge(end, r0, ahead)
         return end, max(0.0, float((end - np.asarray(m.end, dtype=float)) @ ahead))
 
+    def _rise(self, pos: FloatArray, f: _Follow) -> None:
+        """Look for an opening in a side face between this layer and the next one up.
+
+        Layers are ``z_step`` apart, and a slot or a tunnel lower than that (a U-block lying on
+        its arm, its gap facing sideways) can lie wholly between two of them. Where a contour
+        first touches a vertical face (its followed sensor on the equator), the finger rises
+        along it, pressed to it, to ρ under the next layer (or under the top of the hint box).
+        Contact kept all the way: the face is whole there, and the finger goes back down;
+        nothing is recorded. The face falling away on the way up is a rim: the finger rises
+        ρ + :attr:`bump` over it and presses in. The face met again with the followed sensor is
+        the same face, sloping inwards; nothing met within 2ρ + :data:`UNDER_DEPTH`
+        ``bump`` is an opening the whole tip entered: the finger presses on to the opening's
+        back wall, or else goes down onto its floor, and records what it touched (a face
+        inside the envelope: the object is not convex), sliding a little along it. Then it
+        goes back the way it came. Each face is risen along once per layer.
+        """
+        if (
+            self._phase != "layers"
+            or self._looking_under
+            or not self.orientation.vertical
+            or abs(float(f.r0[2])) > 0.05
+            or any(float(r @ f.r0) > 0.98 for r in self._risen)
+        ):
+            return
+        z = float(pos[2])
+        ceiling = float(self.world.hint.hi[2]) - self.rho - self.bump
+        higher = [h for h in self._planned if h > z + 1e-9]
+        if higher:
+            ceiling = min(ceiling, min(higher) - self.rho)
+        if ceiling - z < 2.0 * self.rho:
+            return
+        self._risen.append(np.asarray(f.r0, dtype=float).copy())
+        press = _unit(np.array([f.r0[0], f.r0[1], 0.0]))
+        legs: list[tuple[FloatArray, float]] = []
+        here = np.asarray(pos, dtype=float)
+
+        def go(direction: FloatArray, length: float, *, through: bool = True) -> Motion:
+            nonlocal here
+            m = (self._move_on if through else self._move)(here, direction, length)
+            legs.append((-direction, m.distance))
+            here = np.asarray(m.end, dtype=float)
+            return m
+
+        self._looking_under = True
+        try:
+            up = go(_Z, ceiling - z, through=False)
+            if up.event != "release" or f.sensor in up.fired:
+                return  # the face is whole up there, or overhangs: nothing to look into
+            if ceiling - float(here[2]) < self.rho + self.bump:
+                return  # too near the next layer for the tip to enter what lies above the rim
+            if go(_Z, self.rho + self.bump).event not in ("none", "release"):
+                return
+            enter = go(press, 2.0 * self.rho + (1.0 + UNDER_DEPTH) * self.bump, through=False)
+            if enter.event != "none":
+                return  # the face again (sloping inwards), or a corner
+            hint = self.world.hint
+            depth = float(np.hypot(*np.asarray(hint.size, dtype=float)[:2]))
+            hit = go(press, depth, through=False)
+            if hit.event != "touch" or not hit.closed:
+                if hit.event != "none":
+                    return
+                hit = go(-_Z, 2.0 * (self.rho + self.bump), through=False)
+                if hit.event != "touch" or not hit.closed:
+                    return
+            at = len(legs) - 1
+            wall = self._follow(hit.closed)
+            self.openings += 1
+            self._record(hit, wall, "touch")
+            t = self._tangent(wall)
+            if t is not None:
+                run = self._slide(here, t, min(self.rho, 2.0 * self.spacing), wall.sensor)
+                if run.event == "none" and run.distance > 1e-9:
+                    self._record(run, wall, "slide")
+                legs.append((-np.asarray(run.direction, dtype=float), run.distance))
+                here = np.asarray(run.end, dtype=float)
+            # off the surface touched, back along the way there: the way back is that much shorter
+            back, length = legs[at]
+            off = self._move(here, back, self.bump)
+            here = np.asarray(off.end, dtype=float)
+            legs[at] = (back, max(0.0, length - off.distance))
+        finally:
+            for direction, length in reversed(legs):
+                if length > 1e-12:
+                    here = np.asarray(self._move(here, direction, length).end, dtype=float)
+            self._looking_under = False
+
     def _under_edge(self, pos: FloatArray, press: FloatArray, ahead: FloatArray) -> None:
         """Look under the edge a ride came back on: is the face followed there one tip radius
         lower, or does an opening (a U-block's tunnel, a slot) lie under that edge?
@@ -1284,6 +1373,8 @@ class Controller:
                 return True, pos, f
             if new_touch and surfaces and self._back_on(surfaces, pos, f):
                 return True, pos, f
+            if new_touch and p.comply:
+                self._rise(pos, f)
             t = self._tangent(f)
             if t is None:
                 self._note("a horizontal surface met while contouring; contour stopped")
