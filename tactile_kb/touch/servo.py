@@ -423,7 +423,13 @@ class Controller:
     def _track(self, m: Motion) -> Motion:
         if m.event in ("touch", "blocked"):
             m = self._reread(m)
-        if m.event == "blocked" and m.kind == "move" and not m.fired and m.distance > 0.0:
+        if (
+            m.event == "blocked"
+            and m.kind == "move"
+            and not m.fired
+            and m.distance > 0.0
+            and not self._looking_under  # a look into an opening that is not there: no news
+        ):
             self.blind.append((m.measured, m.direction))
         self.motions += 1
         self._layer_motions += 1
