@@ -45,12 +45,18 @@ def test_a_prism_on_a_narrow_wall_is_a_prism_under_noise(turn: float) -> None:
     assert np.isclose(
         mesh.bounds[1, 2] - mesh.bounds[0, 2], 2 * 0.0588 * np.cos(np.pi / 8), atol=1e-5
     )
-    result = classify(mesh, rules="polyhedra", noise=NOISE, seed=1, finger=builtin_finger("33"))
-    model = result.model
-    # the edges stray beyond the fixed tolerance: only their uncertainties make them parallel
-    assert not lateral_edges_parallel(model, tolerance_deg=7.0, sigmas=0.0)
-    assert lateral_edges_parallel(model, tolerance_deg=7.0, point_tol=0.1)
-    assert result.decision.label == "prism"
+    strays = 0
+    for seed in range(1, 7):  # six samples of the noise
+        result = classify(
+            mesh, rules="polyhedra", noise=NOISE, seed=seed, finger=builtin_finger("33")
+        )
+        model = result.model
+        assert lateral_edges_parallel(model, tolerance_deg=7.0, point_tol=0.1)
+        assert result.decision.label == "prism"
+        strays += not lateral_edges_parallel(model, tolerance_deg=7.0, sigmas=0.0)
+    # in some sample the edges stray beyond the fixed tolerance: only their uncertainties
+    # make them parallel there
+    assert strays >= 1
 
 
 def test_edges_that_meet_at_a_point_get_no_widening() -> None:

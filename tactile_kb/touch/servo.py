@@ -104,6 +104,10 @@ PERSIST_TRIES = DEFAULTS.servo.persist_tries
 on, each time twice as far (0.8, 1.6, 3.2 tip radii), before the contour ends."""
 
 
+UNDER_LOOKS = 2
+"""How many rims of one side face, per layer, :meth:`Controller._under_edge` looks under (a rough
+scan's face rides over dozens of dents)."""
+
 UNDER_DEPTH = 3.0
 """How much deeper than a slide ran (in :attr:`Controller.bump`) the face it followed may lie one
 tip radius lower (a dent, or a face sloped by up to 15°) before an opening under the edge is
@@ -187,8 +191,11 @@ class ServoParams:
         back onto it. A slide still blocked re-acquires the surface as the search cycle does
         when the setting ``servo.persist_tries`` is > 0 (:meth:`Controller._persist`); a
         neighbouring sensor closing while the followed one stays ON is a ripple of the same
-        surface (:meth:`Controller._ripple`). Off: the paper's rules alone (a blocked slide
-        ends the contour).
+        surface (:meth:`Controller._ripple`). On side faces the finger also looks for
+        openings the layers pass by: under the rim a ride over a receding surface came back on
+        (:meth:`Controller._under_edge`), and between two layers, rising once along each face
+        (:meth:`Controller._rise`). Off: the paper's rules alone (a blocked slide ends the
+        contour).
     reapproach
         A contour that a slide blocked without a sensor change ended (something the tip met
         where no sensor faces it: a wall rising from the edge it slid along, or a scan's bump
@@ -402,6 +409,7 @@ class Controller:
         self.openings = 0  # openings found under the edge a ride came back on
         self._looking_under = False
         self._risen: list[FloatArray] = []  # followed directions risen along in this layer
+        self._looked: list[FloatArray] = []  # faces looked under (their press), this layer
         self._planned: list[float] = []  # the heights of the layers to come
         self._layer_motions = 0
         self._blocked_end = False  # the current contour ended at a blocked slide
@@ -587,7 +595,7 @@ class Controller:
                 else []
             )
             + (
-                [f"{self.openings} opening(s) found under the rim a ride came back on"]
+                [f"{self.openings} opening(s) found in side faces (under a rim, or between layers)"]
                 if self.openings
                 else []
             ),
@@ -620,7 +628,8 @@ class Controller:
                 start_contacts = len(self.contacts) - 1
                 above = z + self.z_step > top - self.rho  # the next plane would be over the top
                 last = above or index + 1 >= self.params.max_layers
-                self._risen, self._planned = [], [] if last else [z + self.z_step]
+                self._risen, self._looked = [], []
+                self._planned = [] if last else [z + self.z_step]
                 closed, pos, follow = self._contour(pos, follow, last=last)
                 layer_path = self.path[start_path - 1 if start_path else 0 :]
                 self._finish_layer(index, z, layer_path, closed)
@@ -1181,6 +1190,7 @@ class Controller:
             return m
 
         self._looking_under = True
+        budget = self._layer_motions
         try:
             up = go(_Z, ceiling - z, through=False)
             if up.event != "release" or f.sensor in up.fired:
@@ -1222,6 +1232,7 @@ class Controller:
                 if length > 1e-12:
                     here = np.asarray(self._move(here, direction, length).end, dtype=float)
             self._looking_under = False
+            self._layer_motions = budget  # the look is not the contour's: its budget is its own
 
     def _under_edge(self, pos: FloatArray, press: FloatArray, ahead: FloatArray) -> None:
         """Look under the edge a ride came back on: is the face followed there one tip radius
@@ -1252,6 +1263,11 @@ class Controller:
         lo = float(self.world.hint.lo[2])
         if float(pos[2]) - 2.0 * self.rho < lo + self.bump:
             return
+        # a rough face rides over many dents: look under the first few rims of each face only
+        looked = [r for r in self._looked if float(r @ press) > 0.98]
+        if len(looked) >= UNDER_LOOKS:
+            return
+        self._looked.append(np.asarray(press, dtype=float).copy())
         press = _unit(np.array([press[0], press[1], 0.0]))
         side = _unit(np.array([ahead[0], ahead[1], 0.0]))
         side = _unit(side - (side @ press) * press)
@@ -1266,6 +1282,7 @@ class Controller:
             return m
 
         self._looking_under = True
+        budget = self._layer_motions
         try:
             if go(-press, self.bump).event not in ("none", "release"):
                 return
@@ -1319,6 +1336,7 @@ class Controller:
                 if length > 1e-12:
                     here = np.asarray(self._move(here, direction, length).end, dtype=float)
             self._looking_under = False
+            self._layer_motions = budget  # the look is not the contour's: its budget is its own
 
     def _same_surface(self, m: Motion, f: _Follow, press: FloatArray) -> bool:
         """Whether a touch while riding is the followed surface again: the followed sensor
