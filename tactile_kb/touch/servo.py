@@ -1156,7 +1156,7 @@ class Controller:
         Contact kept all the way: the face is whole there, and the finger goes back down;
         nothing is recorded. The face falling away on the way up is a rim: the finger rises
         ρ + :attr:`bump` over it and presses in. The face met again with the followed sensor is
-        the same face, sloping inwards; nothing met within 2ρ + :data:`UNDER_DEPTH`
+        the same face, sloping inwards; nothing met within 2ρ + (1 + :data:`UNDER_DEPTH`)
         ``bump`` is an opening the whole tip entered: the finger presses on to the opening's
         back wall, or else goes down onto its floor, and records what it touched (a face
         inside the envelope: the object is not convex), sliding a little along it. Then it
