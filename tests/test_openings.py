@@ -19,6 +19,8 @@ run with the mechanism switched off, to show that it is what finds the opening.
 
 from __future__ import annotations
 
+from collections.abc import Callable
+
 import numpy as np
 import pytest
 import trimesh
@@ -79,18 +81,15 @@ def test_the_constructions_place_the_openings_where_the_layers_miss_them() -> No
 
 
 @pytest.mark.parametrize("turn", [0.0, 37.0, 128.0])
-def test_a_tunnel_under_a_rim_just_over_the_tip_is_entered(turn: float) -> None:
-    block, params = _tunnel_block()
-    block = solids.rotate_about_z(block, turn)
-    result = classify(block, explorer=StepperExplorer(params))
-    assert result.decision.label == "not_hexahedron"
-    assert _depth(block, result.record) > 2 * RHO / 5
-    assert any("opening(s) found" in n for n in result.record.notes)
-
-
-@pytest.mark.parametrize("turn", [0.0, 37.0, 128.0])
-def test_a_slot_between_two_layers_is_found_by_rising_along_the_face(turn: float) -> None:
-    block, params = _slot_block()
+@pytest.mark.parametrize(
+    "build",
+    [_tunnel_block, _slot_block],
+    ids=["a tunnel under a rim just over the tip", "a slot between two layers"],
+)
+def test_the_opening_is_found(
+    build: Callable[[], tuple[trimesh.Trimesh, ServoParams]], turn: float
+) -> None:
+    block, params = build()
     block = solids.rotate_about_z(block, turn)
     result = classify(block, explorer=StepperExplorer(params))
     assert result.decision.label == "not_hexahedron"
@@ -102,9 +101,10 @@ def test_a_slot_between_two_layers_is_found_by_rising_along_the_face(turn: float
     ("build", "mechanism"), [(_tunnel_block, "_under_edge"), (_slot_block, "_rise")]
 )
 def test_without_the_look_the_opening_is_missed(
-    build: object, mechanism: str, monkeypatch: pytest.MonkeyPatch
+    build: Callable[[], tuple[trimesh.Trimesh, ServoParams]],
+    mechanism: str,
+    monkeypatch: pytest.MonkeyPatch,
 ) -> None:
-    assert callable(build)
     block, params = build()
     monkeypatch.setattr(Controller, mechanism, lambda self, *args: None)
     result = classify(block, explorer=StepperExplorer(params))

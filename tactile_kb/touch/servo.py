@@ -1179,60 +1179,26 @@ class Controller:
             return
         self._risen.append(np.asarray(f.r0, dtype=float).copy())
         press = _unit(np.array([f.r0[0], f.r0[1], 0.0]))
-        legs: list[tuple[FloatArray, float]] = []
-        here = np.asarray(pos, dtype=float)
-
-        def go(direction: FloatArray, length: float, *, through: bool = True) -> Motion:
-            nonlocal here
-            m = (self._move_on if through else self._move)(here, direction, length)
-            legs.append((-direction, m.distance))
-            here = np.asarray(m.end, dtype=float)
-            return m
-
-        self._looking_under = True
-        budget = self._layer_motions
-        try:
-            up = go(_Z, ceiling - z, through=False)
+        with _Look(self, pos) as look:
+            up = look.go(_Z, ceiling - z, rigid=True)
             if up.event != "release" or f.sensor in up.fired:
                 return  # the face is whole up there, or overhangs: nothing to look into
-            if ceiling - float(here[2]) < self.rho + self.bump:
+            if ceiling - float(look.here[2]) < self.rho + self.bump:
                 return  # too near the next layer for the tip to enter what lies above the rim
-            if go(_Z, self.rho + self.bump).event not in ("none", "release"):
+            if look.go(_Z, self.rho + self.bump).event not in ("none", "release"):
                 return
-            enter = go(press, 2.0 * self.rho + (1.0 + UNDER_DEPTH) * self.bump, through=False)
+            enter = look.go(press, 2.0 * self.rho + (1.0 + UNDER_DEPTH) * self.bump, rigid=True)
             if enter.event != "none":
                 return  # the face again (sloping inwards), or a corner
-            hint = self.world.hint
-            depth = float(np.hypot(*np.asarray(hint.size, dtype=float)[:2]))
-            hit = go(press, depth, through=False)
+            depth = float(np.hypot(*np.asarray(self.world.hint.size, dtype=float)[:2]))
+            hit = look.go(press, depth, rigid=True)
             if hit.event != "touch" or not hit.closed:
                 if hit.event != "none":
                     return
-                hit = go(-_Z, 2.0 * (self.rho + self.bump), through=False)
+                hit = look.go(-_Z, 2.0 * (self.rho + self.bump), rigid=True)  # onto the floor
                 if hit.event != "touch" or not hit.closed:
                     return
-            at = len(legs) - 1
-            wall = self._follow(hit.closed)
-            self.openings += 1
-            self._record(hit, wall, "touch")
-            t = self._tangent(wall)
-            if t is not None:
-                run = self._slide(here, t, min(self.rho, 2.0 * self.spacing), wall.sensor)
-                if run.event == "none" and run.distance > 1e-9:
-                    self._record(run, wall, "slide")
-                legs.append((-np.asarray(run.direction, dtype=float), run.distance))
-                here = np.asarray(run.end, dtype=float)
-            # off the surface touched, back along the way there: the way back is that much shorter
-            back, length = legs[at]
-            off = self._move(here, back, self.bump)
-            here = np.asarray(off.end, dtype=float)
-            legs[at] = (back, max(0.0, length - off.distance))
-        finally:
-            for direction, length in reversed(legs):
-                if length > 1e-12:
-                    here = np.asarray(self._move(here, direction, length).end, dtype=float)
-            self._looking_under = False
-            self._layer_motions = budget  # the look is not the contour's: its budget is its own
+            look.found(hit, self._tangent(self._follow(hit.closed)))
 
     def _under_edge(self, pos: FloatArray, press: FloatArray, ahead: FloatArray) -> None:
         """Look under the edge a ride came back on: is the face followed there one tip radius
@@ -1271,24 +1237,12 @@ class Controller:
         press = _unit(np.array([press[0], press[1], 0.0]))
         side = _unit(np.array([ahead[0], ahead[1], 0.0]))
         side = _unit(side - (side @ press) * press)
-        legs: list[tuple[FloatArray, float]] = []
-        here = np.asarray(pos, dtype=float)
-
-        def go(direction: FloatArray, length: float, *, rigid: bool = False) -> Motion:
-            nonlocal here
-            m = (self._move if rigid else self._move_on)(here, direction, length)
-            legs.append((-direction, m.distance))
-            here = np.asarray(m.end, dtype=float)
-            return m
-
-        self._looking_under = True
-        budget = self._layer_motions
-        try:
-            if go(-press, self.bump).event not in ("none", "release"):
+        with _Look(self, pos) as look:
+            if look.go(-press, self.bump).event not in ("none", "release"):
                 return
-            if go(-_Z, self.rho).event not in ("none", "release"):
+            if look.go(-_Z, self.rho).event not in ("none", "release"):
                 return
-            below = go(press, (1.0 + UNDER_DEPTH) * self.bump, rigid=True)
+            below = look.go(press, (1.0 + UNDER_DEPTH) * self.bump, rigid=True)
             if below.event == "blocked":
                 return
             wall = -side  # the slide came from there: the opening began behind
@@ -1302,41 +1256,21 @@ class Controller:
                     return  # a rim above or below, not a side: too low an opening for the tip
                 wall = side if lateral > 0 else -side
                 # off the corner, far enough sideways for the whole tip to pass it
-                if go(-press, self.bump).event not in ("none", "release"):
+                if look.go(-press, self.bump).event not in ("none", "release"):
                     return
-                if go(-wall, self.rho * (1.0 - abs(lateral)) + self.bump).event != "none":
+                if look.go(-wall, self.rho * (1.0 - abs(lateral)) + self.bump).event != "none":
                     return
-            inside = go(press, 2.0 * self.rho + (1.0 + UNDER_DEPTH) * self.bump, rigid=True)
+            inside = look.go(press, 2.0 * self.rho + (1.0 + UNDER_DEPTH) * self.bump, rigid=True)
             if inside.event != "none":
                 return
-            hit = go(wall, 2.0 * self.rho + current().servo.ride_step * self.rho, rigid=True)
+            hit = look.go(wall, 2.0 * self.rho + current().servo.ride_step * self.rho, rigid=True)
             if hit.event != "touch" or not hit.closed:
                 return
-            f = self._follow(hit.closed)
-            if float(f.r0 @ wall) < math.cos(math.radians(current().servo.ride_deg)):
+            if float(self._follow(hit.closed).r0 @ wall) < math.cos(
+                math.radians(current().servo.ride_deg)
+            ):
                 return  # not a wall square to the way there: an edge or a corner inside
-            self.openings += 1
-            self._record(hit, f, "touch")
-            slid = 0.0
-            while slid < self.rho - 1e-9:  # along the wall, inwards: the wall's plane
-                run = self._slide(here, press, min(self.spacing, self.rho - slid), f.sensor)
-                step = float((np.asarray(run.end, dtype=float) - here) @ press)
-                slid += step
-                here = np.asarray(run.end, dtype=float)
-                if run.event != "none" or step <= 1e-9:
-                    break
-                self._record(run, f, "slide")
-            # off the wall, then back the way the finger came
-            off = self._move(here, -wall, self.bump)
-            here = np.asarray(off.end, dtype=float)
-            legs[-1] = (legs[-1][0], max(0.0, legs[-1][1] - off.distance))
-            legs.append((-press, slid))
-        finally:
-            for direction, length in reversed(legs):
-                if length > 1e-12:
-                    here = np.asarray(self._move(here, direction, length).end, dtype=float)
-            self._looking_under = False
-            self._layer_motions = budget  # the look is not the contour's: its budget is its own
+            look.found(hit, press)  # slid along inwards
 
     def _same_surface(self, m: Motion, f: _Follow, press: FloatArray) -> bool:
         """Whether a touch while riding is the followed surface again: the followed sensor
@@ -1992,6 +1926,63 @@ def _ray_extents(
         ahead = rate > 1e-12
         out.append(float((room[ahead] / rate[ahead]).min()) if ahead.any() else 0.0)
     return out
+
+
+class _Look:
+    """Motions away from where a contour stands, gone back in reverse at the end (a
+    ``with`` block): a look into an opening (:meth:`Controller._rise`,
+    :meth:`Controller._under_edge`) leaves the contour where it was, its motions outside the
+    contour's budget, and no blind contacts of its own."""
+
+    def __init__(self, controller: Controller, start: FloatArray) -> None:
+        self.c = controller
+        self.here = np.asarray(start, dtype=float)
+        self.legs: list[tuple[FloatArray, float]] = []  # (the way back, its length)
+        self.budget = controller._layer_motions
+
+    def __enter__(self) -> _Look:
+        self.c._looking_under = True
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        for direction, length in reversed(self.legs):
+            if length > 1e-12:
+                self.here = np.asarray(self.c._move(self.here, direction, length).end, dtype=float)
+        self.c._looking_under = False
+        self.c._layer_motions = self.budget
+
+    def go(self, direction: FloatArray, length: float, *, rigid: bool = False) -> Motion:
+        """Move (``rigid``: stop at any event; else through losses of contact)."""
+        m = (self.c._move if rigid else self.c._move_on)(self.here, direction, length)
+        self.legs.append((-direction, m.distance))
+        self.here = np.asarray(m.end, dtype=float)
+        return m
+
+    def found(self, hit: Motion, along: FloatArray | None) -> None:
+        """Record the surface inside the opening that the last leg, ``hit``, touched; slide up to
+        ρ ``along`` it, recording the tip centres; step off it back along the way there."""
+        c = self.c
+        at = len(self.legs) - 1
+        wall = c._follow(hit.closed)
+        c.openings += 1
+        c._record(hit, wall, "touch")
+        start = self.here
+        while along is not None and float(np.linalg.norm(self.here - start)) < c.rho - 1e-9:
+            piece = min(c.spacing, c.rho - float(np.linalg.norm(self.here - start)))
+            run = c._slide(self.here, along, piece, wall.sensor)
+            moved = run.distance > 1e-9
+            self.here = np.asarray(run.end, dtype=float)
+            if run.event != "none" or not moved:
+                break
+            c._record(run, wall, "slide")
+        back, length = self.legs[at]
+        off = c._move(self.here, back, c.bump)
+        self.here = np.asarray(off.end, dtype=float)
+        self.legs[at] = (back, max(0.0, length - off.distance))
+        slid = np.asarray(off.start, dtype=float) - start  # undone first, off the surface
+        length = float(np.linalg.norm(slid))
+        if length > 1e-12:
+            self.legs.append((-slid / length, length))
 
 
 @dataclass
