@@ -406,7 +406,7 @@ class Controller:
         self.persisted = 0  # blocked slides after which the surface was re-acquired
         self.ripples = 0  # sensors closing during a slide on the same surface, turned a little
         self.dents = 0  # search cycles that found the same face again beyond a dent
-        self.openings = 0  # openings found under the edge a ride came back on
+        self.openings = 0  # openings found in side faces (under a rim, or between layers)
         self._looking_under = False
         self._risen: list[FloatArray] = []  # followed directions risen along in this layer
         self._looked: list[FloatArray] = []  # faces looked under (their press), this layer
