@@ -410,7 +410,7 @@ class Controller:
         self._looking_under = False
         self._risen: list[FloatArray] = []  # followed directions risen along in this layer
         self._looked: list[FloatArray] = []  # faces looked under (their press), this layer
-        self._planned: list[float] = []  # the heights of the layers to come
+        self._next_z: float | None = None  # the height of the next layer, if one is planned
         self._layer_motions = 0
         self._blocked_end = False  # the current contour ended at a blocked slide
         self._phase = "first-contact"
@@ -629,7 +629,7 @@ class Controller:
                 above = z + self.z_step > top - self.rho  # the next plane would be over the top
                 last = above or index + 1 >= self.params.max_layers
                 self._risen, self._looked = [], []
-                self._planned = [] if last else [z + self.z_step]
+                self._next_z = None if last else z + self.z_step
                 closed, pos, follow = self._contour(pos, follow, last=last)
                 layer_path = self.path[start_path - 1 if start_path else 0 :]
                 self._finish_layer(index, z, layer_path, closed)
@@ -1172,9 +1172,8 @@ class Controller:
             return
         z = float(pos[2])
         ceiling = float(self.world.hint.hi[2]) - self.rho - self.bump
-        higher = [h for h in self._planned if h > z + 1e-9]
-        if higher:
-            ceiling = min(ceiling, min(higher) - self.rho)
+        if self._next_z is not None and self._next_z > z + 1e-9:
+            ceiling = min(ceiling, self._next_z - self.rho)
         if ceiling - z < 2.0 * self.rho:
             return
         self._risen.append(np.asarray(f.r0, dtype=float).copy())
