@@ -784,3 +784,51 @@ def test_a_pyramid_apex_split_by_a_face_turned_a_little_is_one_apex(tilt_deg: fl
     assert get_feature("lateral_edges_concurrent").fn(tilted)
     assert not get_feature("lateral_edges_parallel").fn(tilted)
     assert side_count(tilted) == 6
+
+
+def _tilted_top(a: float, b: float, c: float, degrees: float) -> trimesh.Trimesh:
+    """A box a × b × c whose top turns by ``degrees`` about a horizontal axis through its middle:
+    its lateral edges are ``c ± (a/2)·tan θ`` long, their mean exactly ``c``."""
+    t = math.tan(math.radians(degrees))
+    corners = [
+        (x, y, z if z == 0.0 else c + t * (x - a / 2))
+        for x in (0.0, a)
+        for y in (0.0, b)
+        for z in (0.0, c)
+    ]
+    return trimesh.convex.convex_hull(np.asarray(corners, dtype=float))
+
+
+def test_equal_edges_compares_the_mean_of_each_class_of_parallel_edges() -> None:
+    # A rough top fitted a degree or two off lengthens the lateral edges on one side and
+    # shortens those opposite: a 95 mm cube under a top turned by 4° has lateral edges
+    # 91.7–98.3 mm (7 % apart, beyond the 6 % tolerance edge by edge), whose mean is 95 mm.
+    a = 0.095
+    cube = _tilted_top(a, a, a, 4.0)
+    lateral = sorted(
+        float(np.ptp(cube.vertices[np.isclose(cube.vertices[:, :2], xy).all(axis=1), 2]))
+        for xy in ((0.0, 0.0), (a, 0.0), (0.0, a), (a, a))
+    )
+    assert (lateral[-1] - lateral[0]) / a > 0.06
+    assert abs(float(np.mean(lateral)) - a) < 1e-9
+    for seed in range(3):
+        rec = sample_record(cube, FINGER, per_face=10, noise=0.0, seed=seed)
+        assert evaluate_feature("equal_edges", build_model(rec), {}) is True
+        # the same turn on a box 15 % taller: its lateral class is 15 % longer than the others
+        box = _tilted_top(a, a, 1.15 * a, 4.0)
+        rec = sample_record(box, FINGER, per_face=10, noise=0.0, seed=seed)
+        assert evaluate_feature("equal_edges", build_model(rec), {}) is False
+
+
+def test_equal_edges_needs_each_edge_near_its_class_mean() -> None:
+    # A square frustum, base edges 80 mm, top edges 48 mm, lateral edges 64 mm: each class of
+    # parallel horizontal edges (two of the base, two of the top) has a mean of 64 mm like the
+    # lateral edges, but none of its edges lies within 6 % of that mean.
+    rb, rt = 0.08 / math.sqrt(2), 0.048 / math.sqrt(2)
+    h = math.sqrt(0.064**2 - (rb - rt) ** 2)
+    mesh = solids.frustum(4, rb, rt, h)
+    model = build_model(sample_record(mesh, FINGER, per_face=10, noise=0.0, seed=1))
+    p = model.polyhedron
+    assert p is not None
+    assert sorted(np.round(p.edge_lengths(), 4).tolist()) == [0.048] * 4 + [0.064] * 4 + [0.08] * 4
+    assert evaluate_feature("equal_edges", model, {}) is False

@@ -447,6 +447,13 @@ def _split(
             fold = _fold(idx, normals, centres, fit, scale, reach_deg, pairs, noise)
             if fold is not None:
                 return deeper(idx[fold]) + deeper(idx[~fold])
+            if noise <= 0 < scale:
+                # exact touches of faces that show no detail: the readings' partition, with the
+                # fits' least scale as the noise (two faces 41.8° apart whose V hides within the
+                # split tolerance); a scan's bumps and relief part a face on any partition
+                apart = _readings_apart(idx, centres, normals, fit, scale)
+                if apart is not None and _smooth_parts(fit, idx, apart, scale):
+                    return deeper(idx[apart]) + deeper(idx[~apart])
             edge = _stray_touches(idx, centres, span_min, f)
             return [idx] if edge is None else [idx[~edge], idx[edge]]
         rest = deeper(idx[~edge])
@@ -615,6 +622,21 @@ APART_LEVEL = 0.99
 """Two groups of tip centres lie on two planes, not one (:func:`_two_planes`), when the one
 plane through all of them misses them by more than this quantile of the chi-square spread the
 declared noise (or the groups' own scatter about their planes, when larger) gives."""
+
+
+def _smooth_parts(
+    fit: FitFn, idx: NDArray[np.intp], mask: NDArray[np.bool_], scale: float
+) -> bool:
+    """Whether the tip centres ``idx[mask]`` and ``idx[~mask]`` each lie on their own plane
+    within :data:`NARROW_SCALES` × ``scale`` (their scatter, with three degrees of freedom
+    taken by each plane, or two by a line's), one of them spanning a plane: exact touches of
+    plane faces, not a surface whose bumps and relief the planes of any two parts fit better
+    than one (a few touches along a line lie on their plane within that by chance)."""
+    a, b = fit(idx[mask]), fit(idx[~mask])
+    dof = len(idx) - (3 if a.refined else 2) - (3 if b.refined else 2)
+    if dof < 1 or not (a.refined or b.refined):
+        return False  # two lines of a few touches lie on their planes by chance
+    return math.sqrt((_sse(a) + _sse(b)) / dof) <= NARROW_SCALES * scale
 
 
 @functools.lru_cache(maxsize=256)

@@ -131,6 +131,13 @@ def _through_releases(
             return m, done
 
 
+TOP_UNDER_DEG = 70.0
+"""A layer's touch whose followed direction points more than this below the equator met a top
+just under the tip's centre, not a side (see :meth:`Controller._run_layers`)."""
+
+UNDER_TOP_RHO = 0.5
+"""A layer lowered under a top it met runs this many tip radii below that top."""
+
 RETRACE_POINTS = 64
 """How many of the tip's last positions the way back from under an overhang may run through
 (see :meth:`Controller._retrace_up`)."""
@@ -411,6 +418,8 @@ class Controller:
         self._risen: list[FloatArray] = []  # followed directions risen along in this layer
         self._looked: list[FloatArray] = []  # faces looked under (their press), this layer
         self._next_z: float | None = None  # the height of the next layer, if one is planned
+        self._top_under: float | None = None  # a top met just under the layer (its height)
+        self._lowered = False  # a layer was lowered under a top once
         self._layer_motions = 0
         self._blocked_end = False  # the current contour ended at a blocked slide
         self._phase = "first-contact"
@@ -648,6 +657,12 @@ class Controller:
                 if closed or not top_contacts:
                     top_contacts = layer_contacts  # the top is explored over the last closed layer
                 yield "layer"
+                lowered = self._lower_under_top(z)
+                if lowered is not None:
+                    pos, follow = lowered
+                    z = float(pos[2])
+                    index += 1
+                    continue
                 # a contour a blocked slide ended is no reason to leave the planes above it
                 # unexplored (``reapproach``): the next one is found by a new approach
                 blocked = not closed and self.params.reapproach and self._blocked_end
@@ -1330,6 +1345,8 @@ class Controller:
                 return True, pos, f
             if new_touch and surfaces and self._back_on(surfaces, pos, f):
                 return True, pos, f
+            if new_touch and self._top_met(pos, f):
+                return False, pos, f
             if new_touch and p.comply:
                 self._rise(pos, f)
             t = self._tangent(f)
@@ -1608,6 +1625,39 @@ class Controller:
     def _move_on(self, pos: FloatArray, direction: FloatArray, length: float) -> Motion:
         """Move ``length`` along ``direction`` through losses of contact; stop at anything else."""
         return _through_releases(self._move, pos, direction, length)[0]
+
+    def _top_met(self, pos: FloatArray, f: _Follow) -> bool:
+        """Whether the touch just made in a layer followed a direction more than
+        :data:`TOP_UNDER_DEG` below the equator: a top lies just under the tip's centre (the
+        layer grazes a step, such as a T block's crossbar, by a fraction of a millimetre), and
+        following it would trace the top's edges instead of the sides. Its height is kept for
+        :meth:`_lower_under_top`, once per exploration."""
+        if self._lowered or self._looking_under or self._phase != "layers":
+            return False
+        if float(f.r0[2]) > -math.sin(math.radians(TOP_UNDER_DEG)):
+            return False
+        self._top_under = float(pos[2]) + self.rho * float(f.r0[2])
+        return True
+
+    def _lower_under_top(self, z: float) -> tuple[FloatArray, _Follow] | None:
+        """After a layer at ``z`` that met a top just under the tip (:meth:`_top_met`): the
+        first contact of a layer :data:`UNDER_TOP_RHO` × ρ under that top, found by a new
+        approach, where the equator meets the step's sides; None when there was no such top,
+        the lower layer would graze the table, or the approach finds nothing."""
+        top, self._top_under = self._top_under, None
+        if top is None:
+            return None
+        self._lowered = True
+        lower = top - UNDER_TOP_RHO * self.rho
+        if lower < self.rho + 0.001:
+            return None
+        found = self._first_contact([lower], quiet=True)
+        if found is not None:
+            self._note(
+                f"the layer at z = {z:.4f} m met a top at {top:.4f} m just under the tip: "
+                f"a layer at {lower:.4f} m was contoured under it"
+            )
+        return found
 
     def _z_increment(
         self, pos: FloatArray, f: _Follow, centre: FloatArray | None = None
