@@ -624,9 +624,7 @@ plane through all of them misses them by more than this quantile of the chi-squa
 declared noise (or the groups' own scatter about their planes, when larger) gives."""
 
 
-def _smooth_parts(
-    fit: FitFn, idx: NDArray[np.intp], mask: NDArray[np.bool_], scale: float
-) -> bool:
+def _smooth_parts(fit: FitFn, idx: NDArray[np.intp], mask: NDArray[np.bool_], scale: float) -> bool:
     """Whether the tip centres ``idx[mask]`` and ``idx[~mask]`` each lie on their own plane
     within :data:`NARROW_SCALES` × ``scale`` (their scatter, with three degrees of freedom
     taken by each plane, or two by a line's), one of them spanning a plane: exact touches of
