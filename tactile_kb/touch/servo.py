@@ -133,7 +133,7 @@ def _through_releases(
 
 TOP_UNDER_DEG = 70.0
 """A layer's touch whose followed direction points more than this below the equator met a top
-just under the tip's centre, not a side (see :meth:`Controller._run_layers`)."""
+just under the tip's centre, not a side (see :meth:`Controller._top_met`)."""
 
 UNDER_TOP_RHO = 0.5
 """A layer lowered under a top it met runs this many tip radii below that top."""
