@@ -267,6 +267,7 @@ def main() -> None:
     else:
         outcomes = [_job(job) for job in everything]
     totals = {m: [0, 0] for m in modes}
+    every_per_face: dict[float, list[float]] = {m: [] for m in modes}
     wrong: list[str] = []
     print(
         f"{'family':24s} {'mode':6s} {'poses':>5s} {'right':>7s} {'touch/face':>10s} "
@@ -292,6 +293,7 @@ def main() -> None:
             if args.explorer == "mujoco" and secs
             else "      -"
         )
+        every_per_face[noise] += per_face
         totals[noise][0] += right
         totals[noise][1] += len(jobs)
         mode = "exact" if noise == 0 else f"{noise * 1000:g}mm"
@@ -304,6 +306,10 @@ def main() -> None:
     for noise, (right, runs) in totals.items():
         mode = "exact contacts" if noise == 0 else f"{noise * 1000:g} mm noise"
         print(f"right answers, {mode}: {right}/{runs} = {right / max(1, runs):.1%}")
+    for noise, per in every_per_face.items():
+        mode = "exact contacts" if noise == 0 else f"{noise * 1000:g} mm noise"
+        median = statistics.median(per) if per else math.nan
+        print(f"median touches per face, {mode}: {median:.2f} (of {len(per)} objects)")
     if wrong:
         print("wrong:")
         for w in wrong:

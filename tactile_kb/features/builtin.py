@@ -151,6 +151,10 @@ EDGE_SIGMAS = DEFAULTS.features.edge_sigmas
 lengths exceeds 4·√2·σ with a probability below 1 %."""
 POINT_TOL = DEFAULTS.features.point_tol
 HORIZONTAL_DEG = DEFAULTS.features.horizontal_deg
+PRECISION_RHO = 1e-3
+"""Tip radii: contacts scatter about their face's plane by at least this (5 µm for the 5 mm
+tip) in :func:`_uncertainty`, however exactly they fit it: the explorers' own precision."""
+
 RELIEF_DOF = 4.0
 """Degrees of freedom the assumed relief (``geometry.relief_rho``) is worth when it is pooled
 with the scatter a face's tip centres show about their bent fit (:func:`spread_bend`)."""
@@ -205,12 +209,17 @@ def _uncertainty(model: ObjectModel) -> FloatArray:
         faces = [model.faces[i] for i in model.face_of]
         surface = [f.residual for f in model.faces if f.refined and f.n_contacts >= 6]
         detail = float(np.median(surface)) if surface else 0.0
+        # the scatter the face's uncertainty was computed from is never below the declared
+        # noise, nor the contacts' own precision: an exact record's faces fit their planes
+        # to rounding (1e-17 m), and pooled with a surface that shows a micrometre they
+        # would turn by up to 90°
+        least = max(model.record.noise, PRECISION_RHO * model.record.tip_radius)
         out = []
         for f in faces:
             unc = f.normal_uncertainty_deg
             m = f.n_contacts
-            if f.refined and m > 3 and f.residual > 0.0 and detail > 0.0:
-                own = f.residual * math.sqrt(m / (m - 3))  # σ of the fit, m − 3 dof
+            if f.refined and m > 3 and detail > 0.0:
+                own = max(f.residual * math.sqrt(m / (m - 3)), least)  # σ of the fit, m − 3 dof
                 pooled = _pooled_scatter(own, m - 3, detail)
                 if pooled > own:
                     unc = math.degrees(math.atan(math.tan(math.radians(unc)) * pooled / own))

@@ -234,16 +234,23 @@ def build_model(
     )
     noise = record.noise
     tol = support_tol if support_tol is not None else max(split_tol or geo.split_tol, 6.0 * noise)
-    points, normals, offsets, supporting = _support(arrays[0], record.tip_radius, faces, tol)
+    points, normals, offsets, supporting = _support(arrays[0], record.tip_radius, faces, tol, noise)
     edge_contacts: tuple[int, ...] = ()
     if edge_rounding is not None and len(faces) >= 5:
-        drop = edge_faces(faces, arrays[0], record.tip_radius, noise=noise, rounding=edge_rounding)
+        drop = edge_faces(
+            faces,
+            arrays[0],
+            record.tip_radius,
+            noise=noise,
+            rounding=edge_rounding,
+            sensed=_sensed(record, arrays[1]),
+        )
         drop = _far_from_edges(faces, drop, arrays[0], record.tip_radius, noise, edge_rounding)
         if drop:
             edge_contacts = tuple(sorted(i for k in drop for i in faces[k].contacts))
             faces = tuple(f for k, f in enumerate(faces) if k not in drop)
             points, normals, offsets, supporting = _support(
-                arrays[0], record.tip_radius, faces, tol
+                arrays[0], record.tip_radius, faces, tol, noise
             )
     if edge_rounding is not None and len(faces) >= 5:
         drop = explained_faces(
@@ -255,7 +262,7 @@ def build_model(
             )
             faces = tuple(f for k, f in enumerate(faces) if k not in drop)
             points, normals, offsets, supporting = _support(
-                arrays[0], record.tip_radius, faces, tol
+                arrays[0], record.tip_radius, faces, tol, noise
             )
     if edge_rounding is not None and len(faces) >= 5:
         refitted = refit_past_roundings(
@@ -264,7 +271,7 @@ def build_model(
         if refitted != faces:
             faces = refitted
             points, normals, offsets, supporting = _support(
-                arrays[0], record.tip_radius, faces, tol
+                arrays[0], record.tip_radius, faces, tol, noise
             )
     options = {
         "cut_deg": cut_deg,
@@ -427,22 +434,48 @@ def _far_from_edges(
     return out
 
 
+def _sensed(record: ExplorationRecord, directions: FloatArray) -> FloatArray:
+    """Per contact, the outward normal its sensors read at a touch; NaN for a slide's (it
+    repeats the direction of the sensor its touch chose)."""
+    out = -np.asarray(directions, dtype=float).reshape(-1, 3)
+    slide = np.asarray([c.kind != "touch" for c in record.contacts], dtype=bool)
+    out[slide] = np.nan
+    return out
+
+
 def _support(
-    centres: FloatArray, rho: float, faces: tuple[Face, ...], tol: float
+    centres: FloatArray, rho: float, faces: tuple[Face, ...], tol: float, noise: float = 0.0
 ) -> tuple[FloatArray, FloatArray, FloatArray, list[bool]]:
     """Surface points, face normals and offsets, and which faces support the object: no tip
     that touched lies wholly beyond their plane, by more than ``tol`` (the ball touched the
     object there, so the object reaches beyond the plane: a concave face). The tip centres
     are used, not the surface points estimated from each contact's face: a slide past the
     end of a face touches its edge, and the point estimated on the face's plane lies beyond
-    the neighbouring face's."""
+    the neighbouring face's.
+
+    Under ``noise``, a face's plane may be turned by its normal's uncertainty (its fit's, or
+    its sensors' when it is known from them alone) about its own tip centres: one at a
+    distance ``d`` from them lies beyond the plane by up to ``d · tan(uncertainty)`` more (an
+    undercut face of a lying frustum touched along one line, its quantised normal 5.6° off,
+    put a tip 133 mm away 10 mm beyond it, and the frustum was taken for a concave object).
+    Exact touches keep the strict test: there the other faces' planes are exact, and a face
+    an exact touch lies beyond is left out of the envelope rather than let in turned (let
+    in, two faces of a 3.3 cm icosahedron fitted as one turned five exact models curved)."""
     points = _surface_points(centres, rho, faces)
     normals = np.asarray([f.normal for f in faces], dtype=float).reshape(-1, 3)
     offsets = np.asarray([f.offset for f in faces], dtype=float)
     touched = [i for f in faces for i in f.contacts]
     if touched:
-        beyond = centres[touched] @ normals.T - offsets - rho
-        supporting = [bool(s) for s in beyond.max(axis=0) <= tol]
+        c = centres[touched]
+        beyond = c @ normals.T - offsets - rho
+        allowed = np.full(beyond.shape, tol)
+        for k, f in enumerate(faces if noise > 0 else ()):
+            if not f.contacts:
+                continue
+            own = centres[list(f.contacts)]
+            d = np.sqrt(((c[:, None, :] - own[None, :, :]) ** 2).sum(axis=2)).min(axis=1)
+            allowed[:, k] += d * math.tan(math.radians(min(f.normal_uncertainty_deg, 45.0)))
+        supporting = [bool(s) for s in (beyond - allowed).max(axis=0) <= 0.0]
     else:
         supporting = [True] * len(faces)
     return points, normals, offsets, supporting

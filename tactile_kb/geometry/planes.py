@@ -63,6 +63,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 from scipy.cluster.hierarchy import fcluster, linkage
+from scipy.optimize import nnls
 from scipy.special import gammaincinv
 
 from tactile_kb.errors import GeometryError, UsageError
@@ -245,8 +246,10 @@ def _fit(
         _, s, vt = np.linalg.svd(centres - mean_c, full_matrices=False)
         span = float(s[1] / math.sqrt(m))
         normal = vt[2] if vt[2] @ mean_n >= 0 else -vt[2]
-        if span >= span_min and normal @ mean_n >= math.cos(
-            math.radians(current().geometry.max_refine_deg)
+        if (
+            span >= span_min
+            and normal @ mean_n >= math.cos(math.radians(current().geometry.max_refine_deg))
+            and not _hinged(centres, mean_c, vt, max(scale, HINGE_EXACT))
         ):
             res = (centres - mean_c) @ normal
             if scale > 0 and m >= 4 and float(np.abs(res).max()) > 2.0 * scale:
@@ -277,6 +280,36 @@ def _fit(
     normal = normal / np.linalg.norm(normal)
     res = (centres - mean_c) @ normal
     return _Fit(normal, float(normal @ mean_c), res, False, span)
+
+
+HINGE_EXACT = 1e-9
+"""Metres: centres that spread across their line by no more than this lie on it (exact
+contacts, up to rounding), whatever the fits' least scale (:func:`_hinged`)."""
+
+
+def _hinged(centres: FloatArray, mean_c: FloatArray, vt: FloatArray, scale: float) -> bool:
+    """Whether the plane of ``centres`` hangs on one position: the others lie on a line
+    (spread across it by less than ``scale``, the fits' least scale: the noise), and a line
+    and a point fit a plane exactly, whatever faces they lie on (one contour line on a face
+    and a touch repeated on the next; centres within ``scale`` of each other are one
+    position). Only the extreme centres along and across the centres' line (``vt``: their
+    principal directions about ``mean_c``) can be such a position."""
+    xy = (centres - mean_c) @ vt[:2].T
+    for k in {
+        int(xy[:, 0].argmin()),
+        int(xy[:, 0].argmax()),
+        int(xy[:, 1].argmin()),
+        int(xy[:, 1].argmax()),
+    }:
+        rest = centres[np.linalg.norm(centres - centres[k], axis=1) > scale]
+        if len(rest) < 2:
+            return True  # every centre at one position
+        if len(rest) == 2:
+            return True  # two positions: a line
+        s = np.linalg.svd(rest - rest.mean(axis=0), compute_uv=False)
+        if float(s[1]) / math.sqrt(len(rest)) <= scale:
+            return True
+    return False
 
 
 def _robust_plane(
@@ -346,9 +379,10 @@ def fit_face(
     """Fit the plane of the tip centres: ``(normal, normal·centre, residuals, refined)``.
 
     The normal is the least-squares one when the centres span a plane (RMS spread across
-    their best line ≥ ``span_min``) and it lies within 35° of the sensors' mean normal;
-    otherwise the mean sensor normal, made perpendicular to the centres' line if they are
-    collinear.
+    their best line ≥ ``span_min``), no single position carries that plane (the others on
+    one line: a line and a point fit a plane exactly) and it lies within 35° of the sensors'
+    mean normal; otherwise the mean sensor normal, made perpendicular to the centres' line
+    if they are collinear.
     """
     if span_min is None:
         span_min = current().geometry.span
@@ -1568,6 +1602,7 @@ def edge_faces(
     noise: float = 0.0,
     rounding: float | None = None,
     max_faces: int = 40,
+    sensed: FloatArray | None = None,
 ) -> list[int]:
     """Indices of the contact faces that are touches of the other faces' edges, not faces.
 
@@ -1597,6 +1632,11 @@ def edge_faces(
         σ of the contact positions (m).
     rounding
         See :data:`EDGE_ROUNDING`.
+    sensed
+        (n, 3) per contact, the outward normal its sensors read at the touch (NaN where none
+        was read afresh: a slide repeats its touch's). With it, a face of three or more
+        contacts whose touches read normals away from every edge they lie by stays
+        (:func:`_facing_off_edges`).
     """
     if rounding is None:
         rounding = current().geometry.edge_rounding
@@ -1678,6 +1718,19 @@ def edge_faces(
             if any(faces[j].n_contacts < f.n_contacts for j in against if faces[j].contacts):
                 continue  # touched more than a face it lies against: explored as a face
             allowed = rounding * width + current().geometry.edge_sigmas * noise / math.sqrt(len(c))
+            if (
+                sensed is not None
+                and len(c) >= 3
+                and _facing_off_edges(
+                    sensed[list(f.contacts)],
+                    c,
+                    poly,
+                    rounding * width + 3.0 * noise,
+                    rho,
+                    EDGE_FACING * f.normal_uncertainty_deg,
+                )
+            ):
+                continue  # a row whose touches read normals away from every edge: a face
             if float(penetration.max()) <= allowed:
                 best = k
                 break
@@ -1685,6 +1738,43 @@ def edge_faces(
             return sorted(removed)
         kept.remove(best)
         removed.append(best)
+
+
+EDGE_FACING = 2.0
+"""A touch of an edge (sharp or rounded) senses a normal between the normals of the edge's
+faces: :func:`edge_faces` keeps a face whose touches read normals further than this many
+times its normal's uncertainty outside that range (:func:`_facing_off_edges`)."""
+
+
+def _facing_off_edges(
+    normals: FloatArray, c: FloatArray, poly: Polyhedron, reach: float, rho: float, limit: float
+) -> bool:
+    """Whether the normals sensed at tip centres ``c`` (rows; NaN where none was sensed) face
+    away from every edge those centres could have touched on ``poly`` (the other faces'
+    polyhedron).
+
+    A tip centre of an edge's touch lies outside ``poly``, and its nearest point there lies
+    on the edge, or, where the edge is rounded (with a radius up to ``reach``), on a face
+    within ``reach`` of it: the planes that pass within ``reach`` of that point are the
+    edge's, and the sensed normal lies between their normals (in the cone they span),
+    within the sensors' resolution. A face met where ``poly`` has no edge (a small end face
+    cut off a pyramid's apex, touched beside its rim) is sensed facing elsewhere. True when
+    the median of the sensed normals outside ``poly`` lies more than ``limit`` degrees from
+    its cone; False when no sensed centre lies outside ``poly``."""
+    tol = 0.05 * rho  # Dykstra's nearest points lie on their planes only so nearly
+    use = ~np.isnan(normals).any(axis=1) & ((c @ poly.normals.T - poly.offsets).max(axis=1) > tol)
+    if not use.any():
+        return False
+    q = nearest_points(c[use], poly.normals, poly.offsets)
+    near = np.abs(q @ poly.normals.T - poly.offsets) <= reach + tol
+    angles = []
+    for n, row in zip(normals[use], near, strict=True):
+        cone = poly.normals[row].T  # the normals' cone: nonnegative sums of them
+        m = cone @ nnls(cone, n)[0] if row.any() else np.zeros(3)
+        norm = float(np.linalg.norm(m))
+        cos = float(n @ m) / norm if norm > 1e-12 else -1.0
+        angles.append(math.degrees(math.acos(min(1.0, max(-1.0, cos)))))
+    return float(np.median(angles)) > limit
 
 
 ACUTE_COS = -0.5
@@ -1898,6 +1988,11 @@ def explained_faces(
                 cos_psi = max(float((poly.normals[at] @ mean).min()), cos_cap)
                 inset[i] = rounding * float(widths[at].min()) * (1.0 / cos_psi - 1.0)
             slack = 3.0 * noise
+            reach = rounding * float(widths[against].max()) + detail + slack
+            fitted = np.tile(faces[k].normal_array, (len(c), 1))
+            limit = max(EDGE_FACING * faces[k].normal_uncertainty_deg, EXPLAINED_FACING_DEG)
+            if faces[k].refined and _facing_off_edges(fitted, c, poly, reach, rho, limit):
+                continue  # its plane faces away from every edge it lies by: a face
             if part:  # no rounding inset, and never a tip centre half its radius inside
                 inset = np.zeros(len(c)) - detail - slack + min(detail + slack, 0.5 * rho)
             if float(misfit.max()) <= relief + detail + slack and bool(
@@ -1909,6 +2004,13 @@ def explained_faces(
             return sorted(removed)
         kept.remove(best)
         removed.append(best)
+
+
+EXPLAINED_FACING_DEG = 20.0
+"""Degrees: :func:`explained_faces` keeps a face whose fitted normal lies further than this
+(and :data:`EDGE_FACING` × its uncertainty) outside the normals of the edges and faces its
+tip centres lie by (:func:`_facing_off_edges`): a rounding's or a bump's plane faces between
+them, a face cut off the others' corner faces elsewhere."""
 
 
 def refit_past_roundings(
