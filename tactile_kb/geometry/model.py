@@ -457,8 +457,9 @@ def _support(
     its sensors' when it is known from them alone) about its own tip centres: one at a
     distance ``d`` from them lies beyond the plane by up to ``d · tan(uncertainty)`` more (an
     undercut face of a lying frustum touched along one line, its quantised normal 5.6° off,
-    put a tip 133 mm away 10 mm beyond it, and the frustum was taken for a concave object).
-    Exact touches keep the strict test: there the other faces' planes are exact, and a face
+    put a tip 133 mm away 10 mm beyond it, and the frustum was taken for a concave object);
+    not so a face of one or two touches, which is no row to turn a plane about. Exact
+    touches keep the strict test: there the other faces' planes are exact, and a face
     an exact touch lies beyond is left out of the envelope rather than let in turned (let
     in, two faces of a 3.3 cm icosahedron fitted as one turned five exact models curved)."""
     points = _surface_points(centres, rho, faces)
@@ -470,8 +471,8 @@ def _support(
         beyond = c @ normals.T - offsets - rho
         allowed = np.full(beyond.shape, tol)
         for k, f in enumerate(faces if noise > 0 else ()):
-            if not f.contacts:
-                continue
+            if len(f.contacts) < 3:
+                continue  # one or two touches are no row to turn a plane about
             own = centres[list(f.contacts)]
             d = np.sqrt(((c[:, None, :] - own[None, :, :]) ** 2).sum(axis=2)).min(axis=1)
             allowed[:, k] += d * math.tan(math.radians(min(f.normal_uncertainty_deg, 45.0)))
