@@ -48,6 +48,7 @@ __all__ = [
     "prism",
     "pyramid",
     "rest_on_face",
+    "resting",
     "rhombohedron",
     "rotate_about_z",
     "sphere",
@@ -341,6 +342,24 @@ def stable_poses(
         posed.apply_transform(transforms[k])
         out.append((_settle(posed), float(probs[k])))
     return out
+
+
+def resting(
+    mesh: trimesh.Trimesh, pose: int = 0, turn_deg: float = 0.0, *, min_probability: float = 0.02
+) -> trimesh.Trimesh:
+    """``mesh`` in its ``pose``-th stable pose (:func:`stable_poses`, most probable first),
+    turned by ``turn_deg`` about the vertical: the objects of ``benchmarks/bench_poses.py``.
+
+    >>> lying = resting(prism(6, 0.03, 0.1), 0, 30.0)  # a hexagonal pencil on a side
+    >>> [round(float(x), 3) for x in lying.extents[2:]]
+    [0.052]
+    """
+    poses = stable_poses(mesh, min_probability=min_probability)
+    if not 0 <= pose < len(poses):
+        raise UsageError(
+            f"pose must be 0 to {len(poses) - 1} (the mesh has {len(poses)}), got {pose}"
+        )
+    return rotate_about_z(poses[pose][0], turn_deg)
 
 
 def rotate_about_z(

@@ -94,11 +94,6 @@ def test_the_spot_thresholds_are_settings() -> None:
         assert len(second_spot_probes(build_model(_touched_once(_box_record(0.0))))) == 1
 
 
-def _posed(mesh: trimesh.Trimesh, pose: int, turn: float) -> trimesh.Trimesh:
-    posed = solids.stable_poses(mesh, min_probability=0.02)[pose][0]
-    return solids.rotate_about_z(posed, turn)
-
-
 def _true_normals(mesh: trimesh.Trimesh) -> np.ndarray:
     hull = trimesh.convex.convex_hull(mesh.vertices)
     return np.unique(np.round(hull.face_normals, 6), axis=0)
@@ -116,7 +111,9 @@ def test_a_lying_frustums_overhanging_end_is_found_at_its_table_corner(
     # layer touches it, so its sides' planes close as a tetrahedron whose corner on the table
     # juts out far beyond every touch. No side of that model overhangs, so the corner is
     # probed level; the end face is found and the model is the frustum's five faces.
-    mesh = _posed(solids.rotate_about_z(solids.frustum(3, 0.0194, 0.0096, 0.02), 268.0), pose, turn)
+    mesh = solids.resting(
+        solids.rotate_about_z(solids.frustum(3, 0.0194, 0.0096, 0.02), 268.0), pose, turn
+    )
     truth = _true_normals(mesh)
     assert len(truth) == 5
     r = classify(mesh, rules="polyhedra", noise=0.0005, seed=1)
@@ -141,7 +138,9 @@ def test_a_lying_hexagonal_pyramid_keeps_its_undercut_faces(
     # not probed level (such a probe meets an undercut's edge, whose touches fit a wrong
     # plane), and an undercut side touched once is touched again elsewhere. The faces found
     # lie near true planes, and the lateral edges meet at the apex.
-    mesh = _posed(solids.rotate_about_z(solids.pyramid(6, 0.0315, 0.0405), 357.8), pose, turn)
+    mesh = solids.resting(
+        solids.rotate_about_z(solids.pyramid(6, 0.0315, 0.0405), 357.8), pose, turn
+    )
     truth = _true_normals(mesh)
     r = classify(mesh, rules="polyhedra", noise=noise, seed=1)
     assert r.decision.label == "pyramid"

@@ -161,8 +161,7 @@ def test_slides_repeat_their_touchs_reading_and_do_not_count() -> None:
 
 def _posed_frustum(pose: int, turn: float) -> trimesh.Trimesh:
     m = solids.rotate_about_z(solids.frustum(4, 0.0254, 0.0096, 0.0439), 248.7)
-    posed = solids.stable_poses(m, min_probability=0.02)[pose][0]
-    return solids.rotate_about_z(posed, turn)
+    return solids.resting(m, pose, turn)
 
 
 @pytest.mark.parametrize(

@@ -270,7 +270,7 @@ def test_a_lying_octagonal_prism_has_its_slanted_sides(turn: float) -> None:
 def _stable(m: trimesh.Trimesh, k: int, turn_deg: float) -> trimesh.Trimesh:
     """``m`` in its ``k``-th stable pose of probability ≥ 2 % (trimesh's order), turned about
     z, centred on the table."""
-    return solids.rotate_about_z(solids.stable_poses(m)[k][0], turn_deg)
+    return solids.resting(m, k, turn_deg)
 
 
 @pytest.mark.parametrize(("pose", "turn"), [(2, 66.0), (3, 347.0)])

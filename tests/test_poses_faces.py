@@ -25,8 +25,7 @@ from tactile_kb.pipeline import classify
 def _icosahedron(pose: int, turn: float, circumradius: float = 0.0811) -> trimesh.Trimesh:
     m = trimesh.creation.icosahedron()
     m.apply_scale(circumradius)
-    posed = solids.stable_poses(m, min_probability=0.02)[pose][0]
-    return solids.rotate_about_z(posed, turn)
+    return solids.resting(m, pose, turn)
 
 
 @pytest.mark.parametrize(
@@ -78,8 +77,7 @@ def test_small_icosahedron_whose_two_faces_fit_within_the_split_tolerance(
 
 def _pyramid(n: int, r: float, h: float, turn0: float, pose: int, turn: float) -> trimesh.Trimesh:
     m = solids.rotate_about_z(solids.pyramid(n, r, h), turn0)
-    posed = solids.stable_poses(m, min_probability=0.02)[pose][0]
-    return solids.rotate_about_z(posed, turn)
+    return solids.resting(m, pose, turn)
 
 
 @pytest.mark.parametrize(

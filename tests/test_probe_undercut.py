@@ -51,11 +51,6 @@ def test_a_probe_of_an_undercut_face_near_the_table_touches_where_it_was_aimed(
     assert float(np.asarray(touch.direction) @ -n) > np.cos(np.radians(15.0))  # the face's sensor
 
 
-def _posed(mesh: trimesh.Trimesh, pose: int, turn: float) -> trimesh.Trimesh:
-    posed = solids.stable_poses(mesh, min_probability=0.02)[pose][0]
-    return solids.rotate_about_z(posed, turn)
-
-
 @pytest.mark.parametrize(
     ("mesh", "pose", "turn", "label"),
     [
@@ -72,5 +67,5 @@ def test_lying_solids_with_undercut_faces_near_the_table(
     mesh: trimesh.Trimesh, pose: int, turn: float, label: str
 ) -> None:
     turned = solids.rotate_about_z(mesh, 357.8)  # the instance's own turn in that benchmark
-    r = classify(_posed(turned, pose, turn), rules="polyhedra", noise=0.0005, seed=1)
+    r = classify(solids.resting(turned, pose, turn), rules="polyhedra", noise=0.0005, seed=1)
     assert r.decision.label == label

@@ -156,3 +156,23 @@ def test_stable_poses_rest_on_a_face_most_probable_first() -> None:
     assert len(solids.stable_poses(solids.sphere(0.03))) == 1
     with pytest.raises(UsageError, match="min_probability"):
         solids.stable_poses(block, min_probability=1.5)
+
+
+@pytest.mark.parametrize("turn", [0.0, 37.5, 290.0])
+def test_resting_is_a_stable_pose_turned_about_the_vertical(turn: float) -> None:
+    block = solids.box(0.06, 0.04, 0.02)
+    a = np.radians(turn)
+    rot = np.array([[np.cos(a), -np.sin(a), 0.0], [np.sin(a), np.cos(a), 0.0], [0.0, 0.0, 1.0]])
+    for k in (0, 2, 5):
+        mesh = solids.resting(block, k, turn)
+        assert mesh.bounds[:, 2] == pytest.approx([0.0, [0.02, 0.04, 0.06][k // 2]], abs=1e-9)
+        # the same corners as the plain pose, each turned about the vertical through the centre
+        plain = solids.stable_poses(block)[k][0].vertices @ rot.T
+        gap = np.linalg.norm(mesh.vertices[:, None, :] - plain[None, :, :], axis=2)
+        assert gap.min(axis=1).max() < 1e-9
+        assert gap.min(axis=0).max() < 1e-9
+
+
+def test_resting_names_the_poses_a_mesh_has() -> None:
+    with pytest.raises(UsageError, match=r"pose must be 0 to 5 \(the mesh has 6\), got 6"):
+        solids.resting(solids.box(0.06, 0.04, 0.02), 6)

@@ -33,7 +33,7 @@ NOISE = 0.0005
 
 
 def _resting(turn: float) -> trimesh.Trimesh:
-    return solids.rotate_about_z(solids.stable_poses(solids.octahedron(EDGE))[0][0], turn)
+    return solids.resting(solids.octahedron(EDGE), 0, turn)
 
 
 def test_the_solid_has_eight_equilateral_triangles() -> None:

@@ -89,7 +89,7 @@ def test_a_lying_frustum_whose_undercut_face_was_touched_once_is_convex(
     n: int, r: float, rt: float, h: float, turn0: float, pose: int, turn: float
 ) -> None:
     m = solids.rotate_about_z(solids.frustum(n, r, rt, h), turn0)
-    mesh = solids.rotate_about_z(solids.stable_poses(m, min_probability=0.02)[pose][0], turn)
+    mesh = solids.resting(m, pose, turn)
     result = classify(mesh, rules="polyhedra", noise=0.0005, seed=1, finger=builtin_finger("33"))
     assert result.model.convex
     assert result.decision.label == "frustum"
@@ -100,7 +100,6 @@ def test_a_face_of_two_touches_beyond_which_a_layer_lies_stays_out() -> None:
     # and 13 mm beyond the layers' touches, are no row to turn; let in, the prism was
     # answered other_polyhedron.
     m = solids.rotate_about_z(solids.prism(7, 0.1047, 0.0609), 29.0)
-    posed = solids.stable_poses(m, min_probability=0.02)[3][0]
-    mesh = solids.rotate_about_z(posed, 192.5222218492498)
+    mesh = solids.resting(m, 3, 192.5222218492498)
     result = classify(mesh, rules="polyhedra", noise=0.0005, seed=1, finger=builtin_finger("33"))
     assert result.decision.label == "prism"
