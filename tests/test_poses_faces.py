@@ -17,8 +17,7 @@ import trimesh
 from tactile_kb import solids
 from tactile_kb.features import builtin
 from tactile_kb.features.builtin import parallelism_table
-from tactile_kb.geometry import planes
-from tactile_kb.geometry.planes import Face, fit_face
+from tactile_kb.geometry.planes import Face
 from tactile_kb.pipeline import classify
 
 
@@ -97,36 +96,6 @@ def test_lying_pyramid_whose_faces_were_touched_at_close_heights(
     mesh = _pyramid(n, r, h, turn0, pose, turn)
     result = classify(mesh, rules="polyhedra", noise=0.0, seed=1)
     assert result.decision.label == "pyramid"
-
-
-def test_a_line_and_one_point_span_no_plane_of_their_own() -> None:
-    # Eight exact tip centres along one horizontal line and one more (touched twice) 2 cm
-    # higher fit a plane exactly, whatever faces they lie on: no fitted normal. A second
-    # position off the line makes it a plane.
-    line = [np.array([0.03, y, 0.02]) for y in np.linspace(-0.01, 0.01, 8)]
-    odd = np.array([0.028, 0.004, 0.04])
-    sensors = np.tile([1.0, 0.0, 0.0], (10, 1))
-    centres = np.asarray([*line, odd, odd])
-    # they do fit a plane exactly (its least singular value vanishes), 5.7° off the sensors'
-    assert np.linalg.svd(centres - centres.mean(axis=0), compute_uv=False)[2] < 1e-12
-    _, _, _, refined = fit_face(centres, sensors)
-    assert not refined
-    other = np.array([0.027, -0.005, 0.04])
-    _, _, _, refined = fit_face(np.asarray([*line, odd, other]), sensors)
-    assert refined
-
-
-def test_icosahedron_whose_face_was_a_contour_line_and_a_touch_of_the_next(
-    monkeypatch: pytest.MonkeyPatch,
-) -> None:
-    # A contour line on one face and a touch on the face above it (recorded twice at one
-    # spot) fitted one plane exactly, 19.5° from either face, and the object was curved.
-    mesh = _icosahedron(15, 275.46346523611476, circumradius=0.0357)
-    r = classify(mesh, rules="polyhedra", noise=0.0, seed=1)
-    assert r.decision.label == "other_polyhedron"
-    monkeypatch.setattr(planes, "_hinged", lambda *args: False)
-    r = classify(mesh, rules="polyhedra", noise=0.0, seed=1)
-    assert r.decision.label == "curved"
 
 
 def test_a_face_fitted_exactly_by_four_centres_is_parallel_to_none(

@@ -246,10 +246,8 @@ def _fit(
         _, s, vt = np.linalg.svd(centres - mean_c, full_matrices=False)
         span = float(s[1] / math.sqrt(m))
         normal = vt[2] if vt[2] @ mean_n >= 0 else -vt[2]
-        if (
-            span >= span_min
-            and normal @ mean_n >= math.cos(math.radians(current().geometry.max_refine_deg))
-            and not _hinged(centres, mean_c, vt, max(scale, HINGE_EXACT))
+        if span >= span_min and normal @ mean_n >= math.cos(
+            math.radians(current().geometry.max_refine_deg)
         ):
             res = (centres - mean_c) @ normal
             if scale > 0 and m >= 4 and float(np.abs(res).max()) > 2.0 * scale:
@@ -280,36 +278,6 @@ def _fit(
     normal = normal / np.linalg.norm(normal)
     res = (centres - mean_c) @ normal
     return _Fit(normal, float(normal @ mean_c), res, False, span)
-
-
-HINGE_EXACT = 1e-9
-"""Metres: centres that spread across their line by no more than this lie on it (exact
-contacts, up to rounding), whatever the fits' least scale (:func:`_hinged`)."""
-
-
-def _hinged(centres: FloatArray, mean_c: FloatArray, vt: FloatArray, scale: float) -> bool:
-    """Whether the plane of ``centres`` hangs on one position: the others lie on a line
-    (spread across it by less than ``scale``, the fits' least scale: the noise), and a line
-    and a point fit a plane exactly, whatever faces they lie on (one contour line on a face
-    and a touch repeated on the next; centres within ``scale`` of each other are one
-    position). Only the extreme centres along and across the centres' line (``vt``: their
-    principal directions about ``mean_c``) can be such a position."""
-    xy = (centres - mean_c) @ vt[:2].T
-    for k in {
-        int(xy[:, 0].argmin()),
-        int(xy[:, 0].argmax()),
-        int(xy[:, 1].argmin()),
-        int(xy[:, 1].argmax()),
-    }:
-        rest = centres[np.linalg.norm(centres - centres[k], axis=1) > scale]
-        if len(rest) < 2:
-            return True  # every centre at one position
-        if len(rest) == 2:
-            return True  # two positions: a line
-        s = np.linalg.svd(rest - rest.mean(axis=0), compute_uv=False)
-        if float(s[1]) / math.sqrt(len(rest)) <= scale:
-            return True
-    return False
 
 
 def _robust_plane(
@@ -379,10 +347,9 @@ def fit_face(
     """Fit the plane of the tip centres: ``(normal, normal·centre, residuals, refined)``.
 
     The normal is the least-squares one when the centres span a plane (RMS spread across
-    their best line ≥ ``span_min``), no single position carries that plane (the others on
-    one line: a line and a point fit a plane exactly) and it lies within 35° of the sensors'
-    mean normal; otherwise the mean sensor normal, made perpendicular to the centres' line
-    if they are collinear.
+    their best line ≥ ``span_min``) and it lies within 35° of the sensors' mean normal;
+    otherwise the mean sensor normal, made perpendicular to the centres' line if they are
+    collinear.
     """
     if span_min is None:
         span_min = current().geometry.span
