@@ -22,7 +22,12 @@ import pytest
 import trimesh
 
 from tactile_kb import solids
-from tactile_kb.features.builtin import congruent_faces, edge_uncertainties, equal_edges
+from tactile_kb.features.builtin import (
+    _congruence,
+    congruent_faces,
+    edge_uncertainties,
+    equal_edges,
+)
 from tactile_kb.geometry.model import build_model
 from tactile_kb.pipeline import classify
 from tactile_kb.touch.finger import builtin_finger
@@ -96,3 +101,40 @@ def test_exact_planes_split_nothing_and_a_pulled_corner_stays_apart() -> None:
     for noise in (0.0, NOISE):
         model = build_model(sample_record(pulled, finger, per_face=10, noise=noise, seed=3))
         assert not congruent_faces(model)
+
+
+@pytest.mark.parametrize(
+    ("size", "angle", "noise", "congruent"),
+    [
+        (0.1, 90.0, 0.0, True),  # a cube: six squares
+        (0.1, 84.0, 0.0, False),  # two rhombi of 84°, four squares: 6° apart, measured exactly
+        (0.03, 84.0, 0.0, False),
+        (0.1, 90.0, NOISE, True),
+        (0.1, 75.0, NOISE, False),  # 15° apart, each face's angles known within about 1°
+    ],
+)
+def test_corner_angles_count_within_their_uncertainty(
+    size: float, angle: float, noise: float, congruent: bool
+) -> None:
+    # every side of these parallelepipeds is ``size``: only the corner angles tell them apart
+    mesh = solids.parallelepiped(size, size, size, angle_deg=angle)
+    folds = mesh.face_adjacency_edges[mesh.face_adjacency_angles > 1e-6]  # not diagonals
+    sides = np.linalg.norm(np.subtract(*mesh.vertices[folds.T]), axis=1)
+    assert len(sides) == 12
+    assert np.allclose(sides, size)
+    model = build_model(sample_record(mesh, builtin_finger("33"), per_face=10, noise=noise, seed=3))
+    assert congruent_faces(model) is congruent
+
+
+@pytest.mark.parametrize("turn", [188.23697536285016, 71.02965953393692])
+def test_a_small_octahedrons_angles_are_as_uncertain_as_its_sides(turn: float) -> None:
+    # bench_poses seed 2, lying on a face, 0.5 mm noise: sides uncertain by about 1 mm make
+    # two faces' corner angles uncertain by 4° between them, and they came out 6° apart (more
+    # than the fixed 5° the angles were once held to): a polyhedron of another kind then
+    mesh = solids.resting(solids.rotate_about_z(solids.octahedron(EDGE), 10.3), 0, turn)
+    result = classify(mesh, rules="polyhedra", noise=NOISE, seed=1, finger=builtin_finger("33"))
+    _, _, _, dangles, angle_pair, _ = _congruence(result.model, 4.0)
+    assert dangles.max() > 5.0
+    assert (dangles <= 4.0 * angle_pair).all()
+    assert congruent_faces(result.model)
+    assert result.decision.label == "octahedron"

@@ -1449,18 +1449,22 @@ def _face_cycles(model: ObjectModel, sigmas: float) -> tuple[list[list[int]], Fl
 
 def _congruence(
     model: ObjectModel, sigmas: float
-) -> tuple[bool, FloatArray, FloatArray, float, float]:
+) -> tuple[bool, FloatArray, FloatArray, FloatArray, FloatArray, float]:
     """How far the faces are from congruent with the first: ``(same number of sides,
     differences of the sorted side lengths (F − 1, sides), their uncertainty (F − 1,),
-    largest difference of a sorted corner angle in degrees, mean side length)``. Corners that
-    noise split count once (:func:`_split_corners`); a face's side length is as uncertain as
-    its most uncertain edge (:func:`edge_uncertainties`), and two faces' in quadrature."""
+    largest difference of a sorted corner angle in degrees (F − 1,), its uncertainty in
+    degrees (F − 1,), mean side length)``. Corners that noise split count once
+    (:func:`_split_corners`); a face's side length is as uncertain as its most uncertain
+    edge (:func:`edge_uncertainties`), and two faces' in quadrature. A corner's angle between
+    sides of lengths a and b is uncertain by about s·√(1/a² + 1/b²) radians, s that side
+    uncertainty (each side's direction by s over its length); a face's angles by the most
+    uncertain of its corners."""
     p = _poly(model, "congruent_faces")
     cycles, corners = _face_cycles(model, sigmas)
     counts = np.asarray([len(f) for f in cycles], dtype=np.intp)
-    none = np.zeros((0, 0)), np.zeros(0)
+    none = np.zeros((0, 0)), np.zeros(0), np.zeros(0), np.zeros(0)
     if (counts != counts[0]).any() or counts[0] < 3:
-        return False, *none, math.inf, 0.0
+        return False, *none, 0.0
     sig = _edge_sigmas(model)
     index = {tuple(sorted(e)): i for i, e in enumerate(p.edges)}
     face_sigma = np.asarray(
@@ -1475,17 +1479,19 @@ def _congruence(
     prv = np.roll(v, 1, axis=1)
     a, b = nxt - v, prv - v
     lengths = np.linalg.norm(a, axis=2)
-    cos = np.einsum("fij,fij->fi", a, b) / (lengths * np.linalg.norm(b, axis=2))
+    back = np.linalg.norm(b, axis=2)
+    cos = np.einsum("fij,fij->fi", a, b) / (lengths * back)
     angles = np.degrees(np.arccos(np.clip(cos, -1.0, 1.0)))
+    angle_sigma = np.degrees(face_sigma * np.sqrt(1.0 / lengths**2 + 1.0 / back**2).max(axis=1))
     lengths.sort(axis=1)
     angles.sort(axis=1)
     scale = float(np.mean(lengths.mean(axis=1)))
     if len(counts) < 2:
-        return True, *none, 0.0, scale
+        return True, *none, scale
     diffs = np.abs(lengths[1:] - lengths[0])
     pair = np.hypot(face_sigma[1:], face_sigma[0])
-    da = float(np.abs(angles[1:] - angles[0]).max())
-    return True, diffs, pair, da, scale
+    dangles = np.abs(angles[1:] - angles[0]).max(axis=1)
+    return True, diffs, pair, dangles, np.hypot(angle_sigma[1:], angle_sigma[0]), scale
 
 
 def congruent_faces(
@@ -1494,21 +1500,27 @@ def congruent_faces(
     """All faces are congruent: same number of sides, side lengths and angles (False on a
     model closed by an assumed top, whose lateral faces' height is unknown). Side lengths
     may differ by ``rel_tol`` of the mean side or by ``features.edge_sigmas`` times their
-    uncertainty, whichever is more (as in :func:`equal_edges`), and corners that noise split
-    count once (:func:`_congruence`)."""
+    uncertainty, whichever is more (as in :func:`equal_edges`), and corner angles by
+    ``tolerance_deg`` or as many times theirs (a 3 cm octahedron under 0.5 mm noise: sides
+    uncertain by 1 mm make its angles so by 4° between two faces, and two faces' angles
+    differed by 6°); corners that noise split count once (:func:`_congruence`)."""
     rel_tol = _default(rel_tol, "rel_tol")
     tolerance_deg = _default(tolerance_deg, "tolerance_deg")
     sigmas = current().features.edge_sigmas
     _poly(model, "congruent_faces")
     if model.assumed_top is not None:
         return False
-    same, diffs, pair, da, scale = _derived(
+    same, diffs, pair, dangles, angle_pair, scale = _derived(
         model,
         (__name__, current().features, "congruence"),
         lambda: _congruence(model, sigmas),
     )
     allowed = np.maximum(rel_tol * scale, sigmas * pair)[:, None]
-    return same and bool((diffs <= allowed).all()) and da <= tolerance_deg
+    return (
+        same
+        and bool((diffs <= allowed).all())
+        and bool((dangles <= np.maximum(tolerance_deg, sigmas * angle_pair)).all())
+    )
 
 
 def top_face(model: ObjectModel, *, horizontal_deg: float | None = None) -> bool:
