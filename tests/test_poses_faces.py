@@ -74,6 +74,25 @@ def test_small_icosahedron_whose_two_faces_fit_within_the_split_tolerance(
         assert int(on.sum(axis=0).max()) >= len(centres) - 2
 
 
+def test_noisy_icosahedron_whose_slide_crossed_an_edge_with_one_sensor_closed() -> None:
+    # 0.5 mm noise: a probe's slide ran from one face over the edge onto the next, 41.8°
+    # away, with the same sensor closed. The two parts fit two planes far better than one
+    # (a V beyond the noise), but the part on the next face, 8 centres along 2 cm, came out
+    # 27° from its sensor's direction, past one sensor spacing (26°): noise turns a plane
+    # fitted over so short a span by several degrees. Taken as one face, the V bent it by
+    # 3.9 mm and the object was curved.
+    mesh = _icosahedron(3, 187.08258874, circumradius=0.0357)
+    r = classify(mesh, rules="polyhedra", noise=0.0005, seed=1)
+    assert r.decision.label == "other_polyhedron"
+    # and no face bends: each of the faces touched eight times or more lies within 10° of
+    # one of the icosahedron's (the noise turns a face touched over a short span that far)
+    truth = mesh.face_normals
+    for f in r.model.contact_faces:
+        if f.refined and f.n_contacts >= 8:
+            k = int(np.argmax(truth @ f.normal_array))
+            assert math.degrees(math.acos(min(1.0, float(truth[k] @ f.normal_array)))) < 10.0
+
+
 def _pyramid(n: int, r: float, h: float, turn0: float, pose: int, turn: float) -> trimesh.Trimesh:
     m = solids.rotate_about_z(solids.pyramid(n, r, h), turn0)
     return solids.resting(m, pose, turn)

@@ -593,7 +593,8 @@ def _fold(
         if not all(p.refined and p.max_res <= INSIDE_SIGMAS * scale for p in parts):
             continue
         if any(
-            float((normals[idx[m]] @ p.normal).min()) < cos_reach
+            float((normals[idx[m]] @ p.normal).min())
+            < math.cos(math.radians(reach_deg + _noise_turn(p, noise)))
             for p, m in zip(parts, (mask, ~mask), strict=True)
         ):
             continue
@@ -617,6 +618,15 @@ def _fold(
         if ok and (best is None or score < best[0]):
             best = (score, mask)
     return None if best is None else best[1]
+
+
+def _noise_turn(f: _Fit, noise: float) -> float:
+    """Degrees: how far the declared ``noise`` (σ) may turn the plane of the fit ``f``,
+    :data:`CROSS_SIGMAS` standard errors (σ over its span times √m); 0 without noise. A
+    part of a face touched along a few millimetres turns by degrees under 0.5 mm."""
+    if noise <= 0 or f.span <= 0:
+        return 0.0
+    return CROSS_SIGMAS * math.degrees(math.atan2(noise, f.span * math.sqrt(len(f.residuals))))
 
 
 APART_LEVEL = 0.99
