@@ -620,13 +620,19 @@ def _fold(
     return None if best is None else best[1]
 
 
+def _turn_deg(f: _Fit, sigma: float) -> float:
+    """Degrees: the standard error of the normal of the fit ``f`` when its centres scatter by
+    ``sigma`` about its plane (σ over its span times √m)."""
+    return math.degrees(math.atan2(sigma, f.span * math.sqrt(len(f.residuals))))
+
+
 def _noise_turn(f: _Fit, noise: float) -> float:
     """Degrees: how far the declared ``noise`` (σ) may turn the plane of the fit ``f``,
-    :data:`CROSS_SIGMAS` standard errors (σ over its span times √m); 0 without noise. A
-    part of a face touched along a few millimetres turns by degrees under 0.5 mm."""
+    :data:`CROSS_SIGMAS` standard errors (:func:`_turn_deg`); 0 without noise. A part of a
+    face touched along a few millimetres turns by degrees under 0.5 mm."""
     if noise <= 0 or f.span <= 0:
         return 0.0
-    return CROSS_SIGMAS * math.degrees(math.atan2(noise, f.span * math.sqrt(len(f.residuals))))
+    return CROSS_SIGMAS * _turn_deg(f, noise)
 
 
 APART_LEVEL = 0.99
@@ -1304,7 +1310,7 @@ def _faces_from_contacts(
         if m <= 4:  # three or four centres fit a plane (nearly) exactly: trust the detail
             sigma = max(sigma, detail)  # the other faces show
         if f.refined:
-            unc = math.degrees(math.atan2(sigma, f.span * math.sqrt(m)))
+            unc = _turn_deg(f, sigma)
         else:
             spread = float(np.degrees(np.arccos(np.clip(normals[g] @ f.normal, -1, 1))).max())
             unc = max(spread, cone)
