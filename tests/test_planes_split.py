@@ -11,6 +11,7 @@ import math
 import numpy as np
 import pytest
 
+from tactile_kb.geometry import planes
 from tactile_kb.geometry.planes import merge_planes
 from tactile_kb.record import Contact, ExplorationRecord
 from tactile_kb.touch.finger import builtin_finger
@@ -181,6 +182,77 @@ def test_stray_touches_of_the_next_face_do_not_tilt_a_line() -> None:
     n_a, n_b = len(a_contacts), len(b_contacts)
     assert set(range(n_a, n_a + n_b + 2)) <= set(b_face.contacts)
     assert _angle(b_face.normal, nb) < 0.01
+
+
+def test_a_touch_beside_an_edge_felt_its_face_and_a_corner_did_not() -> None:
+    # Sensors of the 33-sensor finger (vertical head): a face whose outward normal is the
+    # opposite of sensor a's direction. A touch beside its edge closed a and a second sensor
+    # b, 30° or more from a (the edge's other face); a touch of a corner closed b alone.
+    sensors = np.asarray(F33.directions, dtype=float)
+    a = 20  # a sensor near the equator
+    b = int(np.argmin(np.abs(np.degrees(np.arccos(np.clip(sensors @ sensors[a], -1, 1))) - 60)))
+    normal = -sensors[a]
+    away = math.degrees(math.acos(float(np.clip(sensors[a] @ sensors[b], -1, 1))))
+    assert away > 30.0
+
+    def touch(on: tuple[int, ...], followed: int) -> Contact:
+        d = sensors[followed]
+        return Contact(
+            step=0,
+            centre=(0.0, 0.0, 0.05),
+            sensors=on,
+            sensor=followed,
+            direction=(float(d[0]), float(d[1]), float(d[2])),
+            point=tuple(float(v) for v in np.array([0.0, 0.0, 0.05]) + RHO * d),
+        )
+
+    record = _record([touch((a, b), a), touch((a, b), a), touch((b,), b), touch((b,), b)])
+    readings = planes._Readings(record, range(4), sensors)
+    edge, corner = np.array([0, 1]), np.array([2, 3])
+    # the farthest closed sensor (b) lies beyond sensors that stayed OFF, but the nearest (a)
+    # faces the plane: the touches beside the edge felt it
+    reach = 26.0  # about one sensor spacing
+    assert readings.contradicted(edge, normal)
+    assert not readings.unfelt(edge, normal, reach)
+    # the corner's touches closed b alone, more than the reach from the plane's normal
+    assert readings.unfelt(corner, normal, reach)
+    assert not readings.unfelt(corner, normal, away + 1.0)
+
+
+def test_a_far_spot_is_what_lifts_a_contour_line_into_a_plane() -> None:
+    # A contour line of eight tip centres 3.5 mm apart and, 21 mm above its far end and
+    # 4.5 mm across it, one spot touched twice (a corner met by the next layer): the two
+    # touches of the spot are the strays, not the line's ends. The line of all ten leans
+    # towards the spot, and the touch furthest from that line is one of the line's own.
+    line = np.array([[0.0, 0.0035 * k, 0.0216] for k in range(8)])
+    spot = np.array([[0.0045, 0.0195, 0.0429], [0.00452, 0.01953, 0.0429]])
+    centres = np.vstack([line, spot])
+    idx = np.arange(len(centres))
+    normals = np.tile([1.0, 0.0, 0.0], (len(centres), 1))
+    fit = planes._fitter(centres, normals, 0.002, 1e-4)(idx)
+    assert fit.refined  # the ten centres span a plane, thanks to the spot alone
+    straight = planes.SMOOTH_RHO * RHO  # exact touches of an ideal face
+    stray = planes._stray_touches(idx, centres, 0.002, fit, straight)
+    assert stray is not None
+    assert np.flatnonzero(stray).tolist() == [8, 9]
+    # without that tolerance (noise, or a rough surface), the touch furthest from the line of
+    # all is taken: here one of the line's own, and none is handed back
+    assert planes._stray_touches(idx, centres, 0.002, fit) is None
+    # a long contour line (58 touches) with two strays at its far end: the pair is found among
+    # the touches that alone leave the rest nearest one line
+    long_line = np.array([[0.0, 0.001 * k, 0.0216] for k in range(58)])
+    far = np.vstack([long_line, [[0.0045, 0.0545, 0.0429], [0.00452, 0.05453, 0.0429]]])
+    every = np.arange(len(far))
+    fit_far = planes._fitter(far, np.tile([1.0, 0.0, 0.0], (len(far), 1)), 0.002, 1e-4)(every)
+    found = planes._stray_touches(every, far, 0.002, fit_far, straight)
+    assert found is not None
+    assert np.flatnonzero(found).tolist() == [58, 59]
+    # a line alone, and a line with three touches well off it, have none to hand back
+    assert planes._stray_touches(idx[:8], centres, 0.002, fit, straight) is None
+    three = np.vstack([line, spot, [[0.004, 0.002, 0.03]]])
+    whole = np.arange(len(three))
+    fit3 = planes._fitter(three, np.tile([1.0, 0.0, 0.0], (len(three), 1)), 0.002, 1e-4)(whole)
+    assert planes._stray_touches(whole, three, 0.002, fit3, straight) is None
 
 
 @pytest.mark.parametrize(("noise", "refined"), [(0.0, True), (0.0005, False)])

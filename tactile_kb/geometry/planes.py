@@ -400,6 +400,7 @@ def _split(
     reach_deg: float = 90.0,
     noise: float = 0.0,
     readings: _Readings | None = None,
+    straight: float = 0.0,
 ) -> list[NDArray[np.intp]]:
     """Recursively split ``idx`` until each part's centres fit one plane within ``tol``.
 
@@ -411,14 +412,27 @@ def _split(
     A partition is taken only when each part's plane lies within ``reach_deg`` of every
     sensor normal of its touches (a sensor fires only for a surface within its reach): the
     centres of a face touched along one line fit a plane through that line at any tilt, and
-    with a few touches of another face they fit one that no sensor could have felt."""
+    with a few touches of another face they fit one that no sensor could have felt.
+    ``straight`` (exact touches of an ideal surface: :data:`SMOOTH_RHO` × ρ, else 0) is
+    :func:`_stray_touches`' tolerance of a straight line."""
     f = fit(idx)
     if len(idx) < 2 or depth > 8:
         return [idx]
 
     def deeper(part: NDArray[np.intp]) -> list[NDArray[np.intp]]:
         return _split(
-            part, centres, normals, span_min, tol, fit, depth + 1, scale, reach_deg, noise, readings
+            part,
+            centres,
+            normals,
+            span_min,
+            tol,
+            fit,
+            depth + 1,
+            scale,
+            reach_deg,
+            noise,
+            readings,
+            straight,
         )
 
     # touches that closed different sensors and lie on two planes, not one, within the
@@ -453,9 +467,9 @@ def _split(
                 # fits' least scale as the noise (two faces 41.8° apart whose V hides within the
                 # split tolerance); a scan's bumps and relief part a face on any partition
                 apart = _readings_apart(idx, centres, normals, fit, scale)
-                if apart is not None and _smooth_parts(fit, idx, apart, scale):
+                if apart is not None and _smooth_parts(fit, idx, apart, scale, straight > 0):
                     return deeper(idx[apart]) + deeper(idx[~apart])
-            edge = _stray_touches(idx, centres, span_min, f)
+            edge = _stray_touches(idx, centres, span_min, f, straight)
             return [idx] if edge is None else [idx[~edge], idx[edge]]
         rest = deeper(idx[~edge])
         return [idx[edge], *rest]
@@ -641,17 +655,25 @@ plane through all of them misses them by more than this quantile of the chi-squa
 declared noise (or the groups' own scatter about their planes, when larger) gives."""
 
 
-def _smooth_parts(fit: FitFn, idx: NDArray[np.intp], mask: NDArray[np.bool_], scale: float) -> bool:
+def _smooth_parts(
+    fit: FitFn, idx: NDArray[np.intp], mask: NDArray[np.bool_], scale: float, ideal: bool = False
+) -> bool:
     """Whether the tip centres ``idx[mask]`` and ``idx[~mask]`` each lie on their own plane
     within :data:`NARROW_SCALES` × ``scale`` (their scatter, with three degrees of freedom
     taken by each plane, or two by a line's), one of them spanning a plane: exact touches of
     plane faces, not a surface whose bumps and relief the planes of any two parts fit better
-    than one (a few touches along a line lie on their plane within that by chance)."""
+    than one (a few touches along a line lie on their plane within that by chance). On an
+    ``ideal`` surface (no scan detail), centres inside a plane by more than
+    :data:`INSIDE_SIGMAS` × ``scale`` are left out of its scatter, as the robust fit leaves
+    them out of the plane: the tip touched an edge beside the face, nearer than ρ to its
+    plane (a slide that ends at the face's rim)."""
     a, b = fit(idx[mask]), fit(idx[~mask])
-    dof = len(idx) - (3 if a.refined else 2) - (3 if b.refined else 2)
+    inside = INSIDE_SIGMAS * scale if ideal else math.inf
+    kept = [p.residuals[p.residuals >= -inside] for p in (a, b)]
+    dof = sum(map(len, kept)) - (3 if a.refined else 2) - (3 if b.refined else 2)
     if dof < 1 or not (a.refined or b.refined):
         return False  # two lines of a few touches lie on their planes by chance
-    return math.sqrt((_sse(a) + _sse(b)) / dof) <= NARROW_SCALES * scale
+    return math.sqrt(sum(float(r @ r) for r in kept) / dof) <= NARROW_SCALES * scale
 
 
 @functools.lru_cache(maxsize=256)
@@ -779,6 +801,10 @@ _STRAY = 2
 """At most this many touches off a line make a face of a line of touches and those (their
 plane is unchecked: :func:`_stray_touches`)."""
 
+_STRAY_CANDIDATES = 24
+"""Pairs of strays (:func:`_stray_touches`) are sought among this many touches, those whose
+removal alone leaves the rest nearest one line (each of the two strays is among them)."""
+
 
 PARALLEL_SPREAD = 0.5
 """Two parallel faces touched along a line each (:func:`_parallel_lines`) lie apart along
@@ -827,22 +853,45 @@ class _Readings:
             self._on, self._orientations = on, orientations
         return self._on, self._orientations
 
-    def contradicted(self, idx: NDArray[np.intp], normal: FloatArray) -> bool:
-        """Whether the plane of outward ``normal`` contradicts the sensors of every contact
-        ``idx`` (each finger frame turned with its head), all of which closed the same
-        sensors: a rough surface's touches, whose sensors the bumps turn one way and another,
-        say nothing of the plane they lie on."""
+    def _angles(
+        self, idx: NDArray[np.intp], normal: FloatArray
+    ) -> tuple[NDArray[np.bool_], FloatArray] | None:
+        """The sensors ON at each contact ``idx`` and each sensor's angle (degrees) to the
+        plane of outward ``normal`` seen in the contact's finger frame, or None unless every
+        contact closed the same sensors: a rough surface's touches, whose sensors the bumps
+        turn one way and another, say nothing of the plane they lie on."""
         if len(self.sensors) < 2:
-            return False
+            return None
         on, orientations = self._read()
         on = on[idx]
         if not on[0].any() or not (on == on[0]).all():
-            return False  # only one reading, the same at every touch, says which way
+            return None  # only one reading, the same at every touch, says which way
         seen = _head_frame(np.repeat(-normal[None, :], len(idx), axis=0), orientations[idx])
-        angle = np.degrees(np.arccos(np.clip(seen @ self.sensors.T, -1.0, 1.0)))
+        return on, np.degrees(np.arccos(np.clip(seen @ self.sensors.T, -1.0, 1.0)))
+
+    def contradicted(self, idx: NDArray[np.intp], normal: FloatArray) -> bool:
+        """Whether the plane of outward ``normal`` contradicts the sensors of every contact
+        ``idx`` (each finger frame turned with its head), all of which closed the same
+        sensors: a sensor that stayed OFF lies :data:`SENSOR_MARGIN_DEG` nearer its normal
+        than one that closed."""
+        found = self._angles(idx, normal)
+        if found is None:
+            return False
+        on, angle = found
         closed = np.where(on, angle, -np.inf).max(axis=1)
         nearer_off = np.where(on, np.inf, angle).min(axis=1)
         return bool((nearer_off + SENSOR_MARGIN_DEG < closed).all())
+
+    def unfelt(self, idx: NDArray[np.intp], normal: FloatArray, reach_deg: float) -> bool:
+        """Whether no sensor the contacts ``idx`` closed (the same at every one) could have
+        felt the plane of outward ``normal``: even the nearest lies more than ``reach_deg``
+        (about one sensor spacing) from it, as a corner's touch beside a face does. A touch
+        beside an edge closes the sensors of both faces, and one of them faces its own."""
+        found = self._angles(idx, normal)
+        if found is None:
+            return False
+        on, angle = found
+        return bool((np.where(on, angle, np.inf).min(axis=1) > reach_deg).all())
 
 
 def _parallel_lines(
@@ -884,7 +933,7 @@ def _parallel_lines(
 
 
 def _stray_touches(
-    idx: NDArray[np.intp], centres: FloatArray, span_min: float, f: _Fit
+    idx: NDArray[np.intp], centres: FloatArray, span_min: float, f: _Fit, straight: float = 0.0
 ) -> NDArray[np.bool_] | None:
     """The touches of ``idx`` that alone lift a line of touches into a plane, as a mask, or
     None.
@@ -895,17 +944,39 @@ def _stray_touches(
     of the next face that the two-plane split left here tilts it by degrees. Those
     :data:`_STRAY` or fewer touches are handed back as a group of their own: the line keeps
     its sensors' normal, and each joins the face whose plane it lies on
-    (:func:`_merge_coplanar`), the same face again when that is the one."""
+    (:func:`_merge_coplanar`), the same face again when that is the one.
+
+    The strays are the touches furthest from the line of the rest, one at a time, until the
+    rest lie within ``span_min`` of one line. With ``straight`` (exact touches: a contour
+    line of an ideal face is straight within it), the set of one or two whose removal leaves
+    the rest straight within ``straight`` is sought first among all such sets: a spot far
+    off the line (a corner touched 21 mm above it) turns the line of all towards itself, and
+    the touch furthest from that line is one of the line's own."""
     m = len(idx)
     if not f.refined or m < _STRAY + 3:
         return None
     c = centres[idx]
+    if _second_spread(c, np.zeros((1, 0), dtype=np.intp))[0] < span_min**2 * m:
+        return None  # a line already
+    if straight > 0:
+        candidates = np.arange(m)
+        for k in range(1, _STRAY + 1):
+            # sets of two among the touches whose removal alone leaves the rest nearest a line
+            sets = np.asarray(list(itertools.combinations(candidates, k)), dtype=np.intp)
+            spread = _second_spread(c, sets)
+            if k == 1:
+                candidates = np.sort(np.argsort(spread)[:_STRAY_CANDIDATES])
+            best = int(np.argmin(spread))
+            if spread[best] <= straight**2 * (m - k):
+                stray = np.zeros(m, dtype=bool)
+                stray[sets[best]] = True
+                return stray
     stray = np.zeros(m, dtype=bool)
     for _ in range(_STRAY):
         rest = c[~stray]
         mean = rest.mean(axis=0)
-        _, s, vt = np.linalg.svd(rest - mean, full_matrices=False)
-        if s[1] / math.sqrt(len(rest)) < span_min:
+        _, sv, vt = np.linalg.svd(rest - mean, full_matrices=False)
+        if sv[1] / math.sqrt(len(rest)) < span_min:
             break
         off = c - mean
         across = np.linalg.norm(off - np.outer(off @ vt[0], vt[0]), axis=1)
@@ -914,12 +985,34 @@ def _stray_touches(
     else:
         rest = c[~stray]
         mean = rest.mean(axis=0)
-        _, s, vt = np.linalg.svd(rest - mean, full_matrices=False)
-        if s[1] / math.sqrt(len(rest)) >= span_min:
+        _, sv, vt = np.linalg.svd(rest - mean, full_matrices=False)
+        if sv[1] / math.sqrt(len(rest)) >= span_min:
             return None
     if not stray.any():
         return None
     return stray
+
+
+def _on_one_plane(centres: FloatArray, idx: NDArray[np.intp], tol: float) -> bool:
+    """Whether the centres ``idx`` lie on one plane within ``tol`` (RMS, three degrees of
+    freedom taken by the plane): an ideal face's touches along a line and at a spot, not a
+    rough surface's, whose bumps and relief scatter a line's touches off any plane."""
+    c = centres[idx] - centres[idx].mean(axis=0)
+    return float(np.linalg.svd(c, compute_uv=False)[-1]) ** 2 <= tol * tol * max(len(idx) - 3, 1)
+
+
+def _second_spread(c: FloatArray, removed: NDArray[np.intp]) -> FloatArray:
+    """For each row of ``removed`` ((r, k) indices into ``c``, (m, 3)), the second-largest
+    eigenvalue of the scatter of the other points about their mean: how far they stray from
+    one line (the squared second singular value of their centred coordinates). One 3×3
+    eigenproblem per row, from the sums downdated."""
+    gone = c[removed]  # (r, k, 3)
+    n = len(c) - removed.shape[1]
+    sums = c.sum(axis=0)[None, :] - gone.sum(axis=1)
+    outer = (c.T @ c)[None, :, :] - np.einsum("rki,rkj->rij", gone, gone)
+    scatter = outer - sums[:, :, None] * sums[:, None, :] / n
+    out: FloatArray = np.linalg.eigvalsh(scatter)[:, 1]
+    return out
 
 
 EDGE_SPOTS = 3
@@ -1268,37 +1361,53 @@ def _faces_from_contacts(
     # quantisation) of its direction
     reach = 2.0 * merge_cone if merge_cone > 0 else current().geometry.max_refine_deg
     labels = _normal_clusters(normals[keep], cut)
-    groups: list[NDArray[np.intp]] = []
-    for lab in np.unique(labels):
-        groups += _split(
-            keep[labels == lab],
-            centres,
-            normals,
-            span_min,
-            tol,
+
+    def faces(straight: float) -> list[NDArray[np.intp]]:
+        groups: list[NDArray[np.intp]] = []
+        for lab in np.unique(labels):
+            groups += _split(
+                keep[labels == lab],
+                centres,
+                normals,
+                span_min,
+                tol,
+                fit,
+                0,
+                scale,
+                reach,
+                noise,
+                readings,
+                straight,
+            )
+        return _merge_coplanar(
+            groups,
             fit,
-            0,
+            tol,
+            merge_deg,
+            merge_cone,
+            centres,
             scale,
-            reach,
             noise,
             readings,
+            normals,
+            straight,
         )
-    groups = _merge_coplanar(
-        groups, fit, tol, merge_deg, merge_cone, centres, scale, noise, readings, normals
-    )
+
+    groups = faces(0.0)
+    # exact touches of an ideal surface (its faces' centres scatter by no more than
+    # SMOOTH_RHO × ρ about their planes) lie on their faces' planes and lines to its
+    # numerics: split again with that tolerance of a straight line; a scan is exactly flat
+    # between its bumps, and its lines are not straight within it
+    if noise <= 0 and _ideal(groups, fit, SMOOTH_RHO * rho):
+        groups = faces(SMOOTH_RHO * rho)
     groups.sort(key=lambda g: int(g.min()))
     index = (
         np.arange(chosen.start, chosen.stop, chosen.step)
         if isinstance(chosen, range)
         else np.asarray(chosen)
     )
-    # the surface's own detail (a scan's bumps and ripples) from the faces touched often
-    # enough to show it: the median scatter of their centres about their planes
-    rough = [
-        math.sqrt(_sse(f) / (len(g) - 3))
-        for g in groups
-        if len(g) >= _ROUGH_MIN and (f := fit(g)).refined
-    ]
+    # the surface's own detail: the median scatter of the faces that show it
+    rough = [math.sqrt(_sse(f) / (len(f.residuals) - 3)) for f in _detailed(groups, fit)]
     detail = float(np.median(rough)) if rough else 0.0
     out = []
     for g in groups:
@@ -1341,6 +1450,22 @@ NARROW_SCALES = 2.0
 
 NARROW_MIN = 6
 """Least number of centres a narrow span is trusted with (:func:`_exact_fitter`)."""
+
+
+def _detailed(groups: list[NDArray[np.intp]], fit: FitFn) -> list[_Fit]:
+    """The fits of the faces touched often enough to show the surface's own detail (a scan's
+    bumps and ripples) in their centres' scatter about their planes (:data:`_ROUGH_MIN`)."""
+    return [f for g in groups if len(g) >= _ROUGH_MIN and (f := fit(g)).refined]
+
+
+def _ideal(groups: list[NDArray[np.intp]], fit: FitFn, straight: float) -> bool:
+    """Whether the faces that show the surface's detail (:func:`_detailed`) show none: their
+    centres' robust scatter about their planes (1.4826 × the median absolute deviation,
+    which the touches of an edge beside a face, nearer than ρ to its plane, do not move) is
+    at most ``straight`` at the median. A scan's bumps and ripples scatter them by tenths of
+    a millimetre; exact touches of an ideal solid lie on its planes to its numerics."""
+    scatter = [_mad_sigma(f.residuals) for f in _detailed(groups, fit)]
+    return bool(scatter) and float(np.median(scatter)) <= straight
 
 
 def _exact_fitter(fit: FitFn, narrow: FitFn, scale: float) -> FitFn:
@@ -1398,6 +1523,7 @@ def _merge_coplanar(
     noise: float = 0.0,
     readings: _Readings | None = None,
     sensor_normals: FloatArray | None = None,
+    straight: float = 0.0,
 ) -> list[NDArray[np.intp]]:
     """Merge groups whose fitted planes coincide (normals within ``merge_deg``, one plane fits).
 
@@ -1491,6 +1617,19 @@ def _merge_coplanar(
                 else:  # two lines (or spots) that together span a plane near both normals
                     if min(joint.normal @ fits[i].normal, joint.normal @ fits[j].normal) < (
                         cos_loose
+                    ):
+                        continue
+                    # and felt it, as exact touches of an ideal surface tell (``straight``):
+                    # a line and a spot fit a plane exactly wherever the spot lies (a corner
+                    # touched above a contour line)
+                    if (
+                        straight > 0
+                        and cone > 0
+                        and readings is not None
+                        and _on_one_plane(centres, both, straight)
+                        and any(
+                            readings.unfelt(groups[k], joint.normal, 2.0 * cone) for k in (i, j)
+                        )
                     ):
                         continue
                     scatter, line = scale, both
@@ -1827,8 +1966,10 @@ def _rounded_edge_planes(
 SMOOTH_RHO = 0.01
 """Tip radii: a surface whose faces scatter by no more than this beyond the declared noise
 (the median RMS of the faces touched six or more times) shows no scan detail, and
-:func:`explained_faces` explains none of its faces away: an ideal solid's narrow faces and
-edge touches are left to :func:`edge_faces`."""
+:func:`explained_faces` explains none of its faces away but a spot or a line the object
+reaches beyond: an ideal solid's narrow faces and edge touches are left to
+:func:`edge_faces`. Exact touches whose faces scatter robustly by no more than this
+(:func:`_ideal`) are an ideal surface's, split with the tests that hold only for them."""
 
 
 def explained_faces(
@@ -1867,12 +2008,16 @@ def explained_faces(
       touched object reaches beyond (not supporting: no face of a convex object) may be
       inset by ``rounding`` × that width, at most ρ; one whose centres span a plane of
       their own (a concave face fitted as a plane) only as a part of a face fitted apart:
-      with no inset, and never more than ρ/2 inside ``P``'s ρ-offset (a U-block's hollow
-      lies inside by its depth, and stays).
+      with no inset but a rounded edge's (a plane through a contour round a rounded edge
+      and one spot of the next face), and never more than ρ/2 inside ``P``'s ρ-offset (a
+      U-block's hollow lies inside by its depth, and stays).
 
     σ is the declared noise; ``detail`` is :data:`DETAIL_SIGMAS` × the median RMS scatter of
     the tip centres of the faces of six or more contacts about their planes, less the
-    declared noise (in quadrature). Faces are
+    declared noise (in quadrature). On a surface that shows no detail beyond the noise
+    (:data:`SMOOTH_RHO`), only faces touched at one spot or along one line that the touched
+    object reaches beyond are examined, with no relief and no detail (their normal is their
+    sensors', quantised). Faces are
     examined fewest contacts first and removed one at a time while the others still close;
     the table is never removed, and faces are only looked for against faces at least
     ``geometry.edge_min_width`` tip radii wide (next to narrow faces only, as on a curved
@@ -1923,13 +2068,24 @@ def explained_faces(
     scatter = [f.residual for f in faces if f.refined and f.n_contacts >= 6]
     rough = float(np.median(scatter)) if scatter else 0.0
     excess = math.sqrt(max(rough * rough - noise * noise, 0.0))
-    if excess <= SMOOTH_RHO * rho:
-        return removed  # a surface with no detail beyond the noise: no rounding, no relief
-    detail = DETAIL_SIGMAS * excess
+    # a surface with no detail beyond the noise: no rounding, no relief; only a face touched
+    # at one spot or along one line that the touched object reaches beyond (no face of a
+    # convex object: its sensors' normal, quantised, turned it) is looked at, against the
+    # noise and a rounding's inset alone
+    smooth = excess <= SMOOTH_RHO * rho
+    if smooth:
+        relief = 0.0
+    detail = 0.0 if smooth else DETAIL_SIGMAS * excess
     while True:
         best: int | None = None
         order = sorted(
-            (k for k in kept if faces[k].source == "contacts" and faces[k].contacts),
+            (
+                k
+                for k in kept
+                if faces[k].source == "contacts"
+                and faces[k].contacts
+                and not (smooth and (supporting[k] or faces[k].refined))
+            ),
             key=lambda k: (faces[k].n_contacts, k),
         )
         for k in order:
@@ -1956,28 +2112,33 @@ def explained_faces(
             if float(widths[against].max()) < geo.edge_min_width * rho:
                 continue  # only narrow faces around: a curved object's facets stay
             inset = np.zeros(len(c))
+            edge_inset = np.zeros(len(c))  # a rounded edge's, as for a face of the object
             for i in range(len(c)):
                 at = _rounded_edge_planes(over[i], poly.normals, rounding * widths, rho)
+                if len(at) >= 2:
+                    mean = poly.normals[at].sum(axis=0)
+                    mean /= max(float(np.linalg.norm(mean)), 1e-12)
+                    cos_psi = max(float((poly.normals[at] @ mean).min()), cos_cap)
+                    width = float(widths[at].min())
+                    edge_inset[i] = rounding * width * (1.0 / cos_psi - 1.0)
                 if not supporting[k] and len(at):
                     # a plane the touched object reaches beyond is no face of a convex
                     # object: a rounding as deep as any edge's of these faces explains it,
                     # up to the tip's own radius
                     inset[i] = min(rounding * float(widths[at].min()), rho)
-                    continue
-                if len(at) < 2:
-                    continue  # against one face: a flat face's touch, no rounding inset
-                mean = poly.normals[at].sum(axis=0)
-                mean /= max(float(np.linalg.norm(mean)), 1e-12)
-                cos_psi = max(float((poly.normals[at] @ mean).min()), cos_cap)
-                inset[i] = rounding * float(widths[at].min()) * (1.0 / cos_psi - 1.0)
+                else:  # a rounded edge's inset (none against one face: a flat face's touch)
+                    inset[i] = edge_inset[i]
             slack = 3.0 * noise
             reach = rounding * float(widths[against].max()) + detail + slack
             fitted = np.tile(faces[k].normal_array, (len(c), 1))
             limit = max(EDGE_FACING * faces[k].normal_uncertainty_deg, EXPLAINED_FACING_DEG)
             if faces[k].refined and _facing_off_edges(fitted, c, poly, reach, rho, limit):
                 continue  # its plane faces away from every edge it lies by: a face
-            if part:  # no rounding inset, and never a tip centre half its radius inside
-                inset = np.zeros(len(c)) - detail - slack + min(detail + slack, 0.5 * rho)
+            if part:
+                # only a rounded edge's inset (a plane through a few touches of the rounding
+                # and one spot of a face: tilted out of the others), and never a tip centre
+                # half its radius inside
+                inset = np.minimum(edge_inset + detail + slack, 0.5 * rho) - detail - slack
             if float(misfit.max()) <= relief + detail + slack and bool(
                 (misfit >= -(inset + detail + slack)).all()
             ):
