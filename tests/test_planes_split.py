@@ -389,3 +389,31 @@ def test_noisy_faces_41_8_degrees_apart_in_one_cluster_are_two_faces(seed: int) 
         touches += _contour(up, z, np.linspace(-0.0076, 0.0103, 7), rng, noise)
     faces = [f for f in merge_planes(_noisy_record(touches, noise)) if f.source == "contacts"]
     assert sorted(f.contacts for f in faces) == [tuple(range(8)), tuple(range(8, 22))]
+
+
+def test_a_scan_is_no_ideal_surface_though_flat_between_its_bumps() -> None:
+    # Three faces of 12 exact tip centres each, on the planes x = 0, y = 0 and z = 0.05.
+    rng = np.random.default_rng(7)
+    u, v = rng.uniform(0.0, 0.04, size=(2, 36))
+    centres = np.column_stack([u, v, np.full(36, 0.05)])
+    centres[12:24] = np.column_stack([np.zeros(12), u[12:24], v[12:24]])
+    centres[24:] = np.column_stack([u[24:], np.zeros(12), v[24:]])
+    normals = np.repeat([[0.0, 0.0, 1.0], [-1.0, 0.0, 0.0], [0.0, -1.0, 0.0]], 12, axis=0)
+    groups = [np.arange(12), np.arange(12, 24), np.arange(24, 36)]
+    straight = planes.SMOOTH_RHO * RHO
+    fit = planes._fitter(centres, normals, 0.002, 1e-4)
+    assert planes._ideal(groups, fit, straight)
+    # two touches of each face's edge, 1 mm inside its plane (nearer than ρ): still ideal
+    edged = centres.copy()
+    for g, n in zip(groups, normals[::12], strict=True):
+        edged[g[:2]] -= 0.001 * n
+    assert planes._ideal(groups, planes._fitter(edged, normals, 0.002, 1e-4), straight)
+    # a scan's detail: 7 of each face's 12 centres lifted or sunk by 0.4 mm RMS along its
+    # normal, the other 5 exactly on its plane (flat between its bumps): not ideal
+    rough = centres.copy()
+    bumped = np.concatenate([g[:7] for g in groups])
+    rough[bumped] += rng.normal(0.0, 0.0004, size=(len(bumped), 1)) * normals[bumped]
+    assert not planes._ideal(groups, planes._fitter(rough, normals, 0.002, 1e-4), straight)
+    # faces of fewer than six touches show nothing: no evidence of an ideal surface
+    few = [g[:5] for g in groups]
+    assert not planes._ideal(few, fit, straight)

@@ -212,3 +212,13 @@ def test_level_two_scans_keep_their_class_under_noise(mesh: trimesh.Trimesh, lab
         perturb(mesh, 2, seed=0), rules="polyhedra", explorer="stepper", noise=0.0005, seed=0
     )
     assert result.decision.label == label
+
+
+def test_a_poor_scans_flat_patches_are_no_ideal_surface() -> None:
+    # an 11 cm triangular prism scanned at level 3, exact contacts: a contour over a patch
+    # that is exactly flat between bumps is as straight as an ideal face's, and the tests
+    # meant for an ideal surface's exact touches (strays off a straight line) took touches
+    # of its faces away; its faces' scatter (tenths of a millimetre) says it is a scan
+    mesh = solids.rotate_about_z(solids.prism(3, 0.1086, 0.0909), 109.0)
+    result = classify(perturb(mesh, 3, seed=0), rules="polyhedra", explorer="stepper", seed=0)
+    assert result.decision.label == "prism"
