@@ -417,3 +417,19 @@ def test_a_scan_is_no_ideal_surface_though_flat_between_its_bumps() -> None:
     # faces of fewer than six touches show nothing: no evidence of an ideal surface
     few = [g[:5] for g in groups]
     assert not planes._ideal(few, fit, straight)
+
+
+def test_a_touch_beside_the_line_is_no_stray() -> None:
+    # A contour line of twelve exact tip centres, one of them 0.4 mm off it (a slide's end),
+    # and one touch 20 mm off it: only the far touch lifts the line into a plane. Removing
+    # both leaves the straightest rest, but the near one lies within ``span`` of the line.
+    line = np.array([[0.0, 0.004 * k, 0.03] for k in range(12)])
+    line[5, 0] += 0.0004
+    centres = np.vstack([line, [[0.002, 0.02, 0.05]]])
+    idx = np.arange(len(centres))
+    normals = np.tile([1.0, 0.0, 0.0], (len(centres), 1))
+    fit = planes._fitter(centres, normals, 0.002, 1e-4)(idx)
+    assert fit.refined
+    stray = planes._stray_touches(idx, centres, 0.002, fit, planes.SMOOTH_RHO * RHO)
+    assert stray is not None
+    assert np.flatnonzero(stray).tolist() == [12]

@@ -949,9 +949,10 @@ def _stray_touches(
     The strays are the touches furthest from the line of the rest, one at a time, until the
     rest lie within ``span_min`` of one line. With ``straight`` (exact touches: a contour
     line of an ideal face is straight within it), the set of one or two whose removal leaves
-    the rest straight within ``straight`` is sought first among all such sets: a spot far
-    off the line (a corner touched 21 mm above it) turns the line of all towards itself, and
-    the touch furthest from that line is one of the line's own."""
+    the rest straight within ``straight``, each of them more than ``span_min`` off the rest's
+    line, is sought first among all such sets: a spot far off the line (a corner touched
+    21 mm above it) turns the line of all towards itself, and the touch furthest from that
+    line is one of the line's own."""
     m = len(idx)
     if not f.refined or m < _STRAY + 3:
         return None
@@ -966,11 +967,14 @@ def _stray_touches(
             spread = _second_spread(c, sets)
             if k == 1:
                 candidates = np.sort(np.argsort(spread)[:_STRAY_CANDIDATES])
-            best = int(np.argmin(spread))
-            if spread[best] <= straight**2 * (m - k):
+            straightest = np.flatnonzero(spread <= straight**2 * (m - k))
+            for best in straightest[np.argsort(spread[straightest])]:
                 stray = np.zeros(m, dtype=bool)
                 stray[sets[best]] = True
-                return stray
+                # each of them off the line of the rest by more than ``span_min``: what lifts
+                # the line into a plane, not a touch beside it (a slide's end 0.4 mm off)
+                if _off_line(c[~stray], c[stray]) > span_min:
+                    return stray
     stray = np.zeros(m, dtype=bool)
     for _ in range(_STRAY):
         rest = c[~stray]
@@ -991,6 +995,14 @@ def _stray_touches(
     if not stray.any():
         return None
     return stray
+
+
+def _off_line(rest: FloatArray, points: FloatArray) -> float:
+    """The least distance of ``points`` from the least-squares line of ``rest``."""
+    mean = rest.mean(axis=0)
+    axis = np.linalg.svd(rest - mean, full_matrices=False)[2][0]
+    off = points - mean
+    return float(np.linalg.norm(off - np.outer(off @ axis, axis), axis=1).min())
 
 
 def _on_one_plane(centres: FloatArray, idx: NDArray[np.intp], tol: float) -> bool:
