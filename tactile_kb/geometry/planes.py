@@ -2127,19 +2127,18 @@ def explained_faces(
             edge_inset = np.zeros(len(c))  # a rounded edge's, as for a face of the object
             for i in range(len(c)):
                 at = _rounded_edge_planes(over[i], poly.normals, rounding * widths, rho)
-                if len(at) >= 2:
+                if not len(at):
+                    continue
+                width = float(widths[at].min())
+                if len(at) >= 2:  # none against one face: a flat face's touch
                     mean = poly.normals[at].sum(axis=0)
                     mean /= max(float(np.linalg.norm(mean)), 1e-12)
                     cos_psi = max(float((poly.normals[at] @ mean).min()), cos_cap)
-                    width = float(widths[at].min())
                     edge_inset[i] = rounding * width * (1.0 / cos_psi - 1.0)
-                if not supporting[k] and len(at):
-                    # a plane the touched object reaches beyond is no face of a convex
-                    # object: a rounding as deep as any edge's of these faces explains it,
-                    # up to the tip's own radius
-                    inset[i] = min(rounding * float(widths[at].min()), rho)
-                else:  # a rounded edge's inset (none against one face: a flat face's touch)
-                    inset[i] = edge_inset[i]
+                # a plane the touched object reaches beyond is no face of a convex object: a
+                # rounding as deep as any edge's of these faces explains it, up to the tip's
+                # own radius; a face of the object, a rounded edge's inset
+                inset[i] = edge_inset[i] if supporting[k] else min(rounding * width, rho)
             slack = 3.0 * noise
             reach = rounding * float(widths[against].max()) + detail + slack
             fitted = np.tile(faces[k].normal_array, (len(c), 1))
