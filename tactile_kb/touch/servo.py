@@ -1688,6 +1688,14 @@ class Controller:
             if rest > 1e-9:
                 m = self._move_on(pos, _Z, rest)
                 pos = np.asarray(m.end, dtype=float)
+                if m.event == "touch" and self.params.comply:
+                    # met a little higher: a scan's bump on the face just left, or a surface;
+                    # a bump the tip clears by stepping back :attr:`bump` is ridden over
+                    past = self._clear_upwards(pos, f, start_z + self.z_step)
+                    if past is not None and past.event != "touch":
+                        return self._regain(np.asarray(past.end, dtype=float), f, centre)
+                    if past is not None:  # the next surface, more than half a step up
+                        m, pos = past, np.asarray(past.end, dtype=float)
                 if m.event == "touch":
                     nf = self._follow(m.closed)
                     self._record(m, nf, "touch")
@@ -1713,6 +1721,30 @@ class Controller:
             return self._regain(pos, f, centre)
         self._note(f"the z increment stopped at {_fmt(m.end)} ({m.event}): layers end")
         return None
+
+    def _clear_upwards(self, pos: FloatArray, f: _Follow, z: float) -> Motion | None:
+        """After a z increment that lost the face followed by ``f`` met something a little
+        higher (at ``pos``), step back from the face by :attr:`bump` and rise on towards the
+        height ``z``, through losses of contact. The last motion when the rise went past what
+        it met (a bump): free to ``z``, or touching again more than half-way there; else None,
+        the finger back at ``pos`` (a surface: an overhang, a step)."""
+        away = _unit(np.array([-f.r0[0], -f.r0[1], 0.0]))
+        rise = z - float(pos[2])
+        legs: list[tuple[FloatArray, float]] = []
+        here = np.asarray(pos, dtype=float)
+        for leg, (direction, length) in enumerate(((away, self.bump), (_Z, rise))):
+            m = self._move_on(here, direction, max(length, 0.0))
+            legs.append((-direction, m.distance))
+            here = np.asarray(m.end, dtype=float)
+            if m.event in ("none", "release"):
+                continue
+            if leg == 1 and m.event == "touch" and m.distance > 0.5 * rise:
+                return m
+            for back, distance in reversed(legs):
+                if distance > 1e-12:
+                    here = np.asarray(self._move(here, back, distance).end, dtype=float)
+            return None
+        return m
 
     def _regain(
         self, pos: FloatArray, f: _Follow, centre: FloatArray | None
