@@ -2080,13 +2080,12 @@ def explained_faces(
     scatter = [f.residual for f in faces if f.refined and f.n_contacts >= 6]
     rough = float(np.median(scatter)) if scatter else 0.0
     excess = math.sqrt(max(rough * rough - noise * noise, 0.0))
-    # a surface with no detail beyond the noise: no rounding, no relief; only a face touched
+    # a surface with no detail beyond the noise: no relief and no detail; only a face touched
     # at one spot or along one line that the touched object reaches beyond (no face of a
     # convex object: its sensors' normal, quantised, turned it) is looked at, against the
     # noise and a rounding's inset alone
     smooth = excess <= SMOOTH_RHO * rho
-    if smooth:
-        relief = 0.0
+    relief = 0.0 if smooth else relief
     detail = 0.0 if smooth else DETAIL_SIGMAS * excess
     while True:
         best: int | None = None
