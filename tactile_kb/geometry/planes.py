@@ -1607,7 +1607,11 @@ def _merge_coplanar(
                     big, small = (i, j) if len(groups[i]) >= len(groups[j]) else (j, i)
                     if joint.normal @ fits[big].normal < cos_min:
                         continue
-                    scatter = max(scale, _mad_sigma(fits[big].residuals))
+                    # the larger face's scatter, its centres' standard deviation: a scan's
+                    # roughness strays in heavier tails than the robust σ of their median
+                    own = fits[big].residuals
+                    sd = math.sqrt(_sse(fits[big]) / max(len(own) - 3, 1))
+                    scatter = max(scale, _mad_sigma(own), sd)
                     off = np.abs(
                         centres[groups[small]] @ fits[big].normal - fits[big].centre_offset
                     )
