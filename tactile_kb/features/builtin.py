@@ -88,7 +88,7 @@ if TYPE_CHECKING:  # the geometry (scipy) is imported when a feature is evaluate
     from tactile_kb.geometry.model import ObjectModel
     from tactile_kb.geometry.planes import Face
     from tactile_kb.geometry.polyhedron import Polyhedron
-    from tactile_kb.types import FloatArray
+    from tactile_kb.types import FloatArray, IntArray
 
 __all__ = [
     "BUILTIN_FEATURES",
@@ -158,6 +158,9 @@ tip) in :func:`_uncertainty`, however exactly they fit it: the explorers' own pr
 RELIEF_DOF = 4.0
 """Degrees of freedom the assumed relief (``geometry.relief_rho``) is worth when it is pooled
 with the scatter a face's tip centres show about their bent fit (:func:`spread_bend`)."""
+SPOT_RHO = 0.5
+"""Tip radii: tip centres this near each other on a face are one spot to the jackknife of
+:func:`spread_bend` (a touch and the slides that stay by it, a probe's touches at one place)."""
 
 
 @dataclass(frozen=True)
@@ -900,8 +903,8 @@ def spread_bend(
     centres crowded within a few millimetres along ``u``, is cut to that.
     ``sigma`` is the turn's standard error from the larger of the declared noise σ,
     ``features.bend_sigma_rho`` × ρ and the centres' scatter about the bent fit (relief):
-    infinite when the centres cannot show a bend at all (on two lines along ``u``, fewer
-    than five)."""
+    infinite when the centres cannot show a bend at all (fewer than five, or on two lines
+    across ``u``: :func:`_on_two_lines`)."""
     found = _bend(model, face, anywhere)
     return None if found is None else found[:2]
 
@@ -925,7 +928,7 @@ def _bend(model: ObjectModel, face: int, anywhere: bool) -> tuple[float, float, 
     d = -np.asarray([contacts[i].direction for i in pair], dtype=float)
     turn = d[1] / np.linalg.norm(d[1]) - d[0] / np.linalg.norm(d[0])
     u_dir = turn - (turn @ n) * n
-    from tactile_kb.geometry.planes import INSIDE_SIGMAS, MAX_REJECTED
+    from tactile_kb.geometry.planes import INSIDE_SIGMAS, MAX_REJECTED, SMOOTH_RHO
 
     rho = model.record.tip_radius
     floor = max(model.record.noise, current().features.bend_sigma_rho * rho)
@@ -952,7 +955,12 @@ def _bend(model: ObjectModel, face: int, anywhere: bool) -> tuple[float, float, 
     c = c - c.mean(axis=0)
     u, v, h = c @ u_dir, c @ v_dir, c @ n
     width = float(np.ptp(u))
-    if width <= 0:
+    # exact touches of an ideal face lie on its plane (to SMOOTH_RHO ρ): two lines of them
+    # slightly oblique to u still tell a flat face; jittered ones (noise, a scan) fit any bend
+    exact = model.record.noise <= 0 and float(
+        np.linalg.svd(c, compute_uv=False)[2]
+    ) <= SMOOTH_RHO * rho * math.sqrt(len(c))
+    if width <= 0 or (not exact and _on_two_lines(u, SPOT_RHO * rho)):
         return 0.0, math.inf, math.inf
     us, vs = u / width, v / width  # well-conditioned unknowns
     plane = np.column_stack([np.ones_like(us), us, vs])
@@ -965,7 +973,8 @@ def _bend(model: ObjectModel, face: int, anywhere: bool) -> tuple[float, float, 
     design = np.column_stack([plane, q])
     rest = h - design @ np.linalg.lstsq(design, h, rcond=None)[0]
     scatter = math.sqrt(float(rest @ rest) / (len(h) - 4))  # about the bent fit: relief
-    jack = _jackknife_se(design, rest)  # a's standard error, robust to a few stray centres
+    # a's standard error, robust to a few stray centres and to centres crowded at one spot
+    jack = _jackknife_se(design, rest, _spots(np.column_stack([u, v]), SPOT_RHO * rho))
     # relief of height h (geometry.relief_rho × ρ) under the contacts, heights uniform in
     # [0, h]: σ = h/√12, pooled with the measured scatter as a prior worth RELIEF_DOF
     # degrees of freedom (a face touched a few times cannot show its own relief; one touched
@@ -989,21 +998,66 @@ def _bend(model: ObjectModel, face: int, anywhere: bool) -> tuple[float, float, 
     )
 
 
-def _jackknife_se(design: FloatArray, rest: FloatArray) -> float:
+def _spots(points: FloatArray, reach: float) -> IntArray:
+    """A label per point: points within ``reach`` of each other (in chains) share a spot.
+
+    A touch and the slides that stay by it, or a probe's touches at one place, rest on one
+    patch of the surface and share its relief: they tell a face's bend no more than one
+    centre does."""
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import connected_components
+    from scipy.spatial import cKDTree
+
+    pairs = cKDTree(points).query_pairs(reach, output_type="ndarray")
+    graph = coo_matrix(
+        (np.ones(len(pairs)), (pairs[:, 0], pairs[:, 1])), shape=(len(points), len(points))
+    )
+    labels: IntArray = np.asarray(connected_components(graph, directed=False)[1], dtype=np.intp)
+    return labels
+
+
+def _on_two_lines(u: FloatArray, reach: float) -> bool:
+    """Whether positions ``u`` (m) lie on one or two lines across ``u``: in at most two runs
+    (each a chain of positions within ``reach`` of the next), each no wider than ``reach``.
+    Two rows of centres across the bend direction (two layers on a pyramid's side, seen
+    along its slope) cannot show a bend, whatever their jitter along it; a row along it
+    can."""
+    runs = _spots(u[:, None], reach)
+    return len(np.unique(runs)) <= 2 and all(
+        float(np.ptp(u[runs == k])) <= reach for k in np.unique(runs)
+    )
+
+
+def _jackknife_se(design: FloatArray, rest: FloatArray, groups: IntArray | None = None) -> float:
     """The jackknife standard error of the last coefficient of the least-squares fit whose
-    design matrix is ``design`` and residuals ``rest``: from the fits that leave out one row
-    each (closed form through the hat matrix). Unlike the error the residuals' scatter
-    implies, it grows when the coefficient rests on one or two centres (a bump or an edge's
-    touch at the end of a face's row of centres), as a bent fit of a flat face with relief
-    does. 0 when a row's leverage is 1 (the fit needs every row)."""
+    design matrix is ``design`` and residuals ``rest``: from the fits that leave out one
+    group of rows each (``groups``: a label per row, by default one row per group; closed
+    form through the hat matrix).
+    Unlike the error the residuals' scatter implies, it grows when the coefficient rests on
+    one or two spots: a bump or an edge's touch at the end of a face's row of centres, or a
+    face touched a few times at each of a few places (the centres at one place share its
+    relief), as a bent fit of a flat face with relief does. Where the fit cannot do without
+    a group, one row is left out at a time; 0 when it cannot do without a row."""
     n = len(rest)
-    gram = np.linalg.pinv(design.T @ design)
-    lever = np.einsum("ij,jk,ik->i", design, gram, design)
-    if n < 2 or float(lever.max()) >= 1.0 - 1e-9:
+    if n < 2:
         return 0.0
-    # β − β₍ᵢ₎ = (XᵀX)⁻¹ xᵢ eᵢ / (1 − hᵢᵢ): the last coefficient of each
-    shift = (design @ gram[:, -1]) * rest / (1.0 - lever)
-    return math.sqrt((n - 1) / n * float(((shift - shift.mean()) ** 2).sum()))
+    if groups is None:
+        groups = np.arange(n)
+    gram = np.linalg.pinv(design.T @ design)
+    labels = np.unique(groups)
+    shifts = np.empty(len(labels))
+    for k, label in enumerate(labels):
+        rows = np.flatnonzero(groups == label)
+        x = design[rows]
+        inner = np.eye(len(rows)) - x @ gram @ x.T
+        if float(np.linalg.eigvalsh(inner)[0]) <= 1e-9:  # the fit needs this group
+            if len(labels) < n:
+                return _jackknife_se(design, rest, np.arange(n))
+            return 0.0
+        # β − β₍G₎ = (XᵀX)⁻¹ X_Gᵀ (I − H_GG)⁻¹ e_G: the last coefficient of each
+        shifts[k] = float((gram @ x.T @ np.linalg.solve(inner, rest[rows]))[-1])
+    g = len(labels)
+    return math.sqrt((g - 1) / g * float(((shifts - shifts.mean()) ** 2).sum()))
 
 
 def _mad(r: FloatArray) -> float:
