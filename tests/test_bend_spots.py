@@ -10,7 +10,7 @@ import math
 
 import numpy as np
 import pytest
-from test_features import FINGER, _with_contact
+from test_features import FINGER, _side_frame, _with_contact
 
 from tactile_kb import solids
 from tactile_kb.features.builtin import (
@@ -75,15 +75,7 @@ def test_two_jittered_lines_across_the_turn_cannot_show_a_bend(jitter: float) ->
     # roughness): the lines fit any bend, and a fit through the jitter is no measurement
     assert jitter < SPOT_RHO * FINGER.radius
     rec = sample_record(solids.box(0.08, 0.08, 0.08), FINGER, per_face=8, quantise=False, noise=0.0)
-    model = build_model(rec)
-    face = model.contact_faces[0]
-    fi = model.face_of.index(model.faces.index(face))
-    poly = model.polyhedron
-    assert poly is not None
-    centre = poly.vertices[list(poly.faces[fi])].mean(axis=0)
-    n = face.normal_array
-    along = np.cross(n, [0.0, 0.0, 1.0])
-    along /= np.linalg.norm(along)
+    face, fi, centre, n, along = _side_frame(rec)
     d0 = np.asarray(rec.contacts[face.contacts[0]].direction)
     up = d0 * math.cos(math.radians(15.0)) + np.array([0.0, 0.0, math.sin(math.radians(15.0))])
     rng = np.random.default_rng(7)

@@ -559,20 +559,25 @@ def test_a_bend_just_beyond_the_noise_is_curved_and_a_plane_with_noise_is_not(
     assert not get_feature("surface_curved").fn(flat)
 
 
-def test_a_spread_the_centres_cannot_test_counts_as_a_gentle_fold() -> None:
-    # every interior contact of a face on two lines (two layers) fits a plane whatever the
-    # surface does: then a sensor spread inside the face is a fold, one smooth edge's worth
-    rec = sample_record(solids.box(0.08, 0.08, 0.08), FINGER, per_face=8, quantise=False, noise=0.0)
+def _side_frame(rec: ExplorationRecord) -> tuple[Any, int, np.ndarray, np.ndarray, np.ndarray]:
+    """The first contact face of ``rec``'s model: the face, its polyhedron index, its
+    polygon's centre, its normal and the horizontal direction along it."""
     model = build_model(rec)
     face = model.contact_faces[0]
     fi = model.face_of.index(model.faces.index(face))
     poly = model.polyhedron
     assert poly is not None
-    corners = poly.vertices[list(poly.faces[fi])]
-    centre = corners.mean(axis=0)
+    centre = poly.vertices[list(poly.faces[fi])].mean(axis=0)
     n = face.normal_array
     along = np.cross(n, [0.0, 0.0, 1.0])
-    along /= np.linalg.norm(along)
+    return face, fi, centre, n, along / np.linalg.norm(along)
+
+
+def test_a_spread_the_centres_cannot_test_counts_as_a_gentle_fold() -> None:
+    # every interior contact of a face on two lines (two layers) fits a plane whatever the
+    # surface does: then a sensor spread inside the face is a fold, one smooth edge's worth
+    rec = sample_record(solids.box(0.08, 0.08, 0.08), FINGER, per_face=8, quantise=False, noise=0.0)
+    face, fi, centre, n, along = _side_frame(rec)
     d0 = np.asarray(rec.contacts[face.contacts[0]].direction)
     out = rec
     for k, i in enumerate(face.contacts):  # two horizontal lines, 2 cm apart
