@@ -4,6 +4,7 @@ driven by the model, and how an exploration that cannot close says so."""
 from __future__ import annotations
 
 import json
+import math
 from collections.abc import Callable
 from pathlib import Path
 
@@ -16,8 +17,9 @@ from tactile_kb import solids
 from tactile_kb.cli import main
 from tactile_kb.completion import CompletionParams, completion_probes, model_completer
 from tactile_kb.geometry.model import build_model
+from tactile_kb.geometry.planes import SMOOTH_RHO, surface_detail
 from tactile_kb.pipeline import classify
-from tactile_kb.record import ExplorationRecord
+from tactile_kb.record import Contact, ExplorationRecord
 from tactile_kb.touch.servo import ServoParams
 from tactile_kb.touch.stepper import StepperExplorer
 
@@ -273,3 +275,83 @@ def test_a_face_touched_once_with_a_tilted_sensor_is_also_probed_level() -> None
     tilted = [p for p in probes if "touched at one height" in p.reason and p not in level]
     assert tilted
     assert tilted[0].normal[2] > 0.2  # the quantised normal's probe comes first
+
+
+def _side_touched_by_a_line_and(spot: list[tuple[np.ndarray, np.ndarray]], jitter: float):
+    """A 10 × 8 × 6 cm box's record (x in ±5 cm, y in ±4 cm) whose −x side was touched along
+    one line at z = 3 cm, and at ``spot`` (tip centres and directions); every face's tip
+    centres lifted off and into their planes by ``jitter`` in turn (a scan's detail)."""
+    from tactile_kb.touch.finger import builtin_finger
+    from tactile_kb.touch.synthetic import sample_record
+
+    box = solids.box(0.10, 0.08, 0.06)
+    rec = sample_record(box, builtin_finger("33"), per_face=10, noise=0.0, seed=3)
+    rho = rec.tip_radius
+    s = np.asarray(rec.sensor_directions)
+
+    def touch(i: int, centre: np.ndarray, d: np.ndarray) -> Contact:
+        k = int(np.argmax(s @ d))
+        lifted = centre - jitter * (1 if i % 2 else -1) * d
+        return rec.contacts[0].model_copy(
+            update={
+                "centre": tuple(float(v) for v in lifted),
+                "direction": tuple(float(v) for v in d),
+                "point": tuple(float(v) for v in lifted + rho * d),
+                "sensors": (k,),
+                "sensor": k,
+            }
+        )
+
+    others = [
+        touch(i, np.asarray(c.centre), np.asarray(c.direction))
+        for i, c in enumerate(rec.contacts)
+        if c.direction[0] < 0.5  # the −x side's own touches are replaced
+    ]
+    x = np.array([1.0, 0.0, 0.0])
+    line = [
+        touch(j, np.array([-0.05 - rho, y, 0.03]), x)
+        for j, y in enumerate(np.linspace(-0.03, 0.03, 7))
+    ]
+    return rec.model_copy(
+        update={"contacts": [*others, *line, *(touch(j, c, d) for j, (c, d) in enumerate(spot))]}
+    )
+
+
+def test_a_scans_second_height_on_a_rounded_edge_is_tested_half_way() -> None:
+    # The side's other touches: a probe's on its top edge's rounding (r = 6 mm, the tip 30°
+    # up from the side), 1.5 mm inside the side's plane. On a scan touched without noise
+    # (faces scattering by 0.3 mm) they join the side and tilt it about its line: the side
+    # is tested half way from the line (z = 3 cm) to an end of the face (5.5 cm under the
+    # top edge, or 0.75 cm over the table), where it is flat.
+    rho, r, phi = RHO, 0.006, math.radians(30.0)
+    d = np.array([math.cos(phi), 0.0, -math.sin(phi)])
+    axis = np.array([-0.05 + r, 0.0, 0.06 - r])
+    rounding = [(axis - (rho + r) * d + [0.0, y, 0.0], d) for y in (0.0, 0.001)]
+    scan = _side_touched_by_a_line_and(rounding, 0.0003)
+    model = build_model(scan)
+    assert surface_detail(model.faces) > SMOOTH_RHO * rho
+    assert surface_detail(model.faces, noise=0.0005) == 0.0  # hidden in declared noise
+    side = [f for f in model.faces if f.normal[0] < -0.9]
+    assert len(side) == 1
+    assert side[0].n_contacts == 9  # the line and the rounding's touches
+    asked = [
+        p
+        for p in completion_probes(model)
+        if p.reason.startswith("a second height on a rounded edge")
+    ]
+    heights = sorted(p.target[2] for p in asked)
+    assert np.allclose(
+        heights, [0.03 - 0.5 * (0.03 - 0.0075), 0.03 + 0.5 * (0.055 - 0.03)], atol=0.001
+    )
+    assert all(p.normal[0] < -0.99 for p in asked)
+    # the same touch on the flat side, 1.5 cm over the line: a second height, nothing asked
+    flat = [(np.array([-0.05 - rho, y, 0.045]), np.array([1.0, 0.0, 0.0])) for y in (0.0, 0.001)]
+    model = build_model(_side_touched_by_a_line_and(flat, 0.0003))
+    assert not [p for p in completion_probes(model) if "facing (-1.0" in p.reason]
+    # exact touches of an ideal box show no detail: no scan, no rounding looked for
+    ideal = build_model(_side_touched_by_a_line_and(rounding, 0.0))
+    assert surface_detail(ideal.faces) <= SMOOTH_RHO * rho
+    assert not [p for p in completion_probes(ideal) if "rounded edge" in p.reason]
+    # the scan touched with declared noise: its detail may be the noise's, nothing asked
+    noisy = build_model(scan.model_copy(update={"noise": 0.0005}))
+    assert not [p for p in completion_probes(noisy) if "rounded edge" in p.reason]

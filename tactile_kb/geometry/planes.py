@@ -106,6 +106,7 @@ __all__ = [
     "nearest_points",
     "refit_past_roundings",
     "rounding_zone",
+    "surface_detail",
 ]
 
 
@@ -1988,6 +1989,17 @@ reaches beyond: an ideal solid's narrow faces and edge touches are left to
 (:func:`_ideal`) are an ideal surface's, split with the tests that hold only for them."""
 
 
+def surface_detail(faces: Sequence[Face], noise: float = 0.0) -> float:
+    """The surface's own detail as its faces show it (m): the median RMS scatter of the tip
+    centres of the faces touched six or more times about their planes, beyond the declared
+    ``noise`` (in quadrature). An ideal solid's exact touches show none; a scan's faces
+    scatter by tenths of a millimetre (its bumps, relief and roughness); beyond
+    :data:`SMOOTH_RHO` ρ the surface is a scan's."""
+    scatter = [f.residual for f in faces if f.refined and f.n_contacts >= 6]
+    rough = float(np.median(scatter)) if scatter else 0.0
+    return math.sqrt(max(rough * rough - noise * noise, 0.0))
+
+
 def explained_faces(
     faces: Sequence[Face],
     supporting: Sequence[bool],
@@ -2078,12 +2090,9 @@ def explained_faces(
     bound = (centre, 3.0 * float(np.linalg.norm(pts - centre, axis=1).max()))
     kept = list(range(len(faces)))
     cos_cap = math.cos(math.radians(75.0))
-    # the surface's detail as the faces measure it: the median scatter of the tip centres of
-    # the faces that span a plane about it (a scan's noise lifts a tip by a few times that)
-    # (beyond the declared noise, which the slack below covers)
-    scatter = [f.residual for f in faces if f.refined and f.n_contacts >= 6]
-    rough = float(np.median(scatter)) if scatter else 0.0
-    excess = math.sqrt(max(rough * rough - noise * noise, 0.0))
+    # the surface's detail as the faces measure it (a scan's noise lifts a tip by a few
+    # times that), beyond the declared noise, which the slack below covers
+    excess = surface_detail(faces, noise)
     # a surface with no detail beyond the noise: no relief and no detail; only a face touched
     # at one spot or along one line that the touched object reaches beyond (no face of a
     # convex object: its sensors' normal, quantised, turned it) is looked at, against the
