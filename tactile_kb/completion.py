@@ -247,22 +247,17 @@ def completion_probes(model: ObjectModel, *, height_gap: float | None = None) ->
     # level-1 to level-3 scans: 0.38–0.60 mm)
     scan = record.noise <= 0 and surface_detail(model.faces) > SMOOTH_RHO * rho
     again: list[Probe] = []
-    for k, verts in enumerate(poly.faces):
-        found = _modelled_face(model, k)
-        if found is None:
-            continue
-        face, n = found
+    for k, verts, face, n in _modelled_faces(model):
         if face.source == "contacts" and n[2] >= current().explore.top_nz:
             probes += _top_probes(face, poly.vertices[list(verts)], centres, rho)
             continue
         if face.source != "contacts" or abs(n[2]) > 0.9:
             continue  # tops and the table: not probed at another height
-        zs = centres[list(face.contacts), 2] if face.contacts else np.zeros(0)
+        own = centres[list(face.contacts)].reshape(-1, 3)
+        zs = own[:, 2]
         rounded = False
         if scan and face.refined and len(zs) and float(zs.max() - zs.min()) >= gap:
-            zone = rounding_zone(
-                centres[list(face.contacts)], poly, k, rho, current().geometry.edge_rounding
-            )
+            zone = rounding_zone(own, poly, k, rho, current().geometry.edge_rounding)
             flat = zs[~zone]
             if len(flat) and float(flat.max() - flat.min()) < gap:
                 zs, rounded = flat, True
@@ -431,7 +426,7 @@ def second_spot_probes(model: ObjectModel) -> list[Probe]:
     centres = np.asarray([c.centre for c in record.contacts], dtype=float).reshape(-1, 3)
     top_nz = current().explore.top_nz
     out = []
-    for verts, face, n in _modelled_faces(model):
+    for _, verts, face, n in _modelled_faces(model):
         if face.source != "contacts" or not face.contacts or n[2] >= top_nz:
             continue
         pts = centres[list(face.contacts)]
@@ -913,15 +908,15 @@ def _table_corner_probe(v: FloatArray, n: FloatArray, hull: ConvexHull, rho: flo
     )
 
 
-def _modelled_faces(model: ObjectModel) -> Iterator[tuple[list[int], Face, FloatArray]]:
-    """Each polyhedron face the model maps to a face: its vertices, the model's face and that
-    face's unit normal."""
+def _modelled_faces(model: ObjectModel) -> Iterator[tuple[int, list[int], Face, FloatArray]]:
+    """Each polyhedron face the model maps to a face: its index in the polyhedron, its
+    vertices, the model's face and that face's unit normal."""
     poly = model.polyhedron
     assert poly is not None
     for k, verts in enumerate(poly.faces):
         found = _modelled_face(model, k)
         if found is not None:
-            yield list(verts), *found
+            yield k, list(verts), *found
 
 
 def _modelled_face(model: ObjectModel, k: int) -> tuple[Face, FloatArray] | None:
@@ -945,7 +940,7 @@ def _low_side_probes(model: ObjectModel, centres: FloatArray, rho: float) -> lis
     poly = model.polyhedron
     assert poly is not None
     out = []
-    for verts, face, n in _modelled_faces(model):
+    for _, verts, face, n in _modelled_faces(model):
         if face.source != "contacts" or abs(n[2]) > 0.3 or not face.contacts:
             continue
         ring = poly.vertices[list(verts)]
