@@ -40,6 +40,10 @@
   horizontal planes cannot touch, are explored from above: a vertical approach over the
   middle of the last contour, then slides round a diamond on its principal axes. A touch
   from above that cannot slide (an apex or an edge) is noted and not recorded as a plane.
+  On a scan's rough top (the contours rode over irregularities, :data:`ROUGH_RIDES`),
+  where the sensors that close are turned by the roughness, the tip
+  seats itself (lifts, steps on a little, presses down until the sensor pointing down
+  closes) and follows that sensor, and seats itself again where a slide ends early.
 
 Contacts: a ``"touch"`` contact on every OFF→ON of the followed sensor and ``"slide"``
 contacts every ``spacing`` along each tangential move and at its end (many tip centres per
@@ -1889,14 +1893,21 @@ class _TopPhase:
 
     def __init__(self, controller: Controller) -> None:
         self._c = controller
+        self._rough = False
+        self._seats = 0
 
     def run(self, contacts: list[Contact]) -> None:
         """Approach from above over the middle of the last contour; slide round a diamond on it.
 
         The diamond's corners lie on the contour's principal axes at ``top_spread`` × its
         half-widths, so that the tip centres on the top span it; then round a wider one
-        (``top_outer``), kept only when it closes on the top without riding over anything. A
-        touch that cannot slide (an apex or an edge) is noted and not recorded as a plane.
+        (``top_outer``), kept only when it closes on the top without riding over anything
+        (on a rough top: with its tip centres on the first diamond's plane within
+        :attr:`bump`). A touch that cannot slide (an apex or an edge) is noted and not
+        recorded as a plane. On a scan's rough top (the touch closes more than the sensor
+        pointing down, on a surface the contours rode over at least :data:`ROUGH_RIDES`
+        times) that sensor is followed, the tip seated first (:meth:`_seat`) when it did not
+        close.
         """
         c = self._c
         if c.finger.nearest((0.0, 0.0, -1.0)) is None:
@@ -1917,17 +1928,32 @@ class _TopPhase:
         if m.event != "touch":
             c._note(f"the approach from above at {_fmt(start)} found nothing ({m.event})")
             return
-        f = c._follow(m.closed)
-        first = len(c.contacts)
-        c._record(m, f, "touch")
-        pos = np.asarray(m.end, dtype=float)
         a1 = np.array([vt[0, 0], vt[0, 1], 0.0])
         a2 = np.array([vt[1, 0], vt[1, 1], 0.0])
         r1, r2 = float(reach[0]), float(reach[1])
         mid3 = np.array([mid[0], mid[1], 0.0])
         inner = [mid3 + d for d in (a1 * r1, a2 * r2, -a1 * r1, -a2 * r2)]
+        down = int(np.argmax(c._dirs @ -_Z))
+        f = c._follow(m.closed)
+        # a scan's rough top: the tip rests on a few high points, and the sensors that close
+        # are the roughness's; a finger under force control seats itself on the top
+        self._rough = c.params.comply and set(m.closed) != {down} and c.rides >= ROUGH_RIDES
+        if self._rough and down not in m.closed:
+            here = np.asarray(m.end, dtype=float)
+            seated = self._seat(here, inner[0] - here, (0.5 * c.rho, c.rho, 1.5 * c.rho))
+            if seated is not None:
+                m = seated
+                f = c._follow(m.closed)
+        if self._rough and down in m.closed:
+            # the sensor pointing down is the top's: follow it (a tilted one, the roughness's,
+            # loses the top at the first slide)
+            f = _Follow(down, f.group, c._dirs[down].copy())
+        first = len(c.contacts)
+        c._record(m, f, "touch")
+        pos = np.asarray(m.end, dtype=float)
         # the first diamond lies inside the top whenever its corners do (the top is convex)
-        moved, at = self._diamond(pos, f, inner)
+        rides0 = c.rides
+        moved, at = self._diamond(pos, f, inner, rides0)
         if at is not None and c.params.top_outer is not None and _spans(c.contacts[first:], c.rho):
             # the wider diamond, led out from the first one's corner on a1 (where the tip is)
             # to its own: each corner top_outer of the way from the middle to where the
@@ -1938,41 +1964,142 @@ class _TopPhase:
                     mid3 + a * (c.params.top_outer * max(float(t) - c.rho, 0.0))
                     for a, t in zip((a1, a2, -a1, -a2), reach_out, strict=True)
                 ]
-                kept, rides = len(c.contacts), c.rides
-                if self._diamond(at, f, outer)[1] is None or c.rides > rides:
+                kept, rides = len(c.contacts), c.rides + self._seats
+                closed = self._diamond(at, f, outer, rides0)[1] is not None
+                if not closed or (
+                    c.rides + self._seats > rides
+                    and not (
+                        self._rough and _on_plane(c.contacts[first:kept], c.contacts[kept:], c.bump)
+                    )
+                ):
                     # it left the top (a frustum's smaller one), or rode over its sensors'
                     # turn (a lying cylinder's ridge curving away): only a whole diamond slid
-                    # with the one sensor is known to lie on one flat top
+                    # with the one sensor is known to lie on one flat top; on a rough top,
+                    # one whose tip centres stay on the first diamond's plane within a bump
                     del c.contacts[kept:]
         if moved < c.edge_slide:
             del c.contacts[first:]
             c._note(f"the touch from above at {_fmt(m.end)} is an apex or an edge: not a plane")
 
+    def _seat(self, pos: FloatArray, toward: FloatArray, steps: Sequence[float]) -> Motion | None:
+        """Seat the tip on a scan's rough top, as a finger under force control settles on it.
+
+        On a rough top the tip rests on a few high points, and the sensors that close are
+        the roughness's, turned from straight down; a tilted one, followed, loses the top at
+        the first slide. From ``pos`` the tip lifts by :attr:`bump` (twice that when something
+        blocks the step: a letter, a bump), steps each of ``steps`` along ``toward``
+        (horizontal) and presses down again, each time from ``pos``: the
+        first press that closes the sensor pointing down is returned, the tip there. None
+        when none does (an apex, an edge, a slanted face, where a smaller top ended), the tip
+        back at ``pos``."""
+        c = self._c
+        u = np.array([toward[0], toward[1], 0.0])
+        size = float(np.linalg.norm(u))
+        if size < 1e-9:
+            return None
+        u /= size
+        down = int(np.argmax(c._dirs @ -_Z))
+        base = np.asarray(pos, dtype=float)
+        for k in steps:
+            for lift in (c.bump, 2.0 * c.bump):  # a letter or a bump in the way: lift more
+                here = base
+                legs: list[tuple[FloatArray, float]] = []
+                up = c._move_on(here, _Z, lift)
+                legs.append((-_Z, up.distance))
+                here = np.asarray(up.end, dtype=float)
+                blocked = up.event not in ("none", "release")
+                if not blocked:
+                    step = c._move(here, u, k)
+                    legs.append((-u, step.distance))
+                    here = np.asarray(step.end, dtype=float)
+                    blocked = step.event != "none"
+                    if not blocked:
+                        press = c._move(here, -_Z, lift + c.bump)
+                        if press.event == "touch" and down in press.closed:
+                            return press
+                        legs.append((_Z, press.distance))
+                        here = np.asarray(press.end, dtype=float)
+                for direction, length in reversed(legs):
+                    if length > 1e-12:
+                        here = np.asarray(c._move(here, direction, length).end, dtype=float)
+                if not blocked:
+                    break
+        return None
+
     def _diamond(
-        self, pos: FloatArray, f: _Follow, corners: list[FloatArray]
+        self, pos: FloatArray, f: _Follow, corners: list[FloatArray], rides: int
     ) -> tuple[float, FloatArray | None]:
         """From ``pos``, slide straight to the first of the diamond's ``corners`` (their z
         ignored: the slides follow the top), then round the diamond back to it. Returns the
         distance slid and where the tip is when the diamond closed, None when a slide ended
-        early (the top ended, or an obstacle)."""
+        early (the top ended, or an obstacle).
+
+        On a rough top (the touch from above closed more than the sensor pointing down on a
+        surface ridden over, or a slide rode over something since ``rides``), a slide that
+        ends early is not yet the top's end: the tip seats itself again ρ/2, ρ or 3ρ/2
+        further on (:meth:`_seat`, no further than the corner), follows the sensor pointing
+        down from there and slides on. Where a smaller top ends, the press meets its slanted
+        side or nothing, and the diamond ends there."""
         c = self._c
         ring = [*corners, corners[0]]
         lead = ring[0] - pos
         lead[2] = 0.0
-        legs = [(lead, float(np.linalg.norm(lead)))]
-        legs += [(b - a, float(np.linalg.norm(b - a))) for a, b in itertools.pairwise(ring)]
+        legs = [(lead, float(np.linalg.norm(lead)), ring[0])]
+        legs += [(b - a, float(np.linalg.norm(b - a)), b) for a, b in itertools.pairwise(ring)]
         moved = 0.0
-        for direction, length in legs:
-            if length < 1e-9:
-                continue
-            sm, travelled = c._slide_sampled(pos, _unit(direction), f, length)
-            moved += travelled
-            pos = np.asarray(sm.end, dtype=float)
-            if travelled > 1e-6:
-                c._record(sm, f, "slide")
-            if sm.event != "none":
-                return moved, None
+        down = int(np.argmax(c._dirs @ -_Z))
+        for direction, length, corner in legs:
+            u = _unit(direction)
+            left = length
+            while left > 1e-9:
+                sm, travelled = c._slide_sampled(pos, u, f, left)
+                moved += travelled
+                left -= travelled
+                pos = np.asarray(sm.end, dtype=float)
+                if travelled > 1e-6:
+                    c._record(sm, f, "slide")
+                if sm.event == "none":
+                    break
+                if not (self._rough or c.rides > rides or self._seats):
+                    return moved, None
+                steps = sorted({min(k * c.rho, left) for k in (0.5, 1.0, 1.5)})
+                seated = self._seat(pos, u, steps)
+                if seated is None:
+                    return moved, None
+                self._seats += 1
+                nf = c._follow(seated.closed)
+                f.sensor, f.group, f.r0 = down, nf.group, c._dirs[down].copy()
+                c._record(seated, f, "slide")
+                # the hop is not slid: a tip seated again and again round an apex slides
+                # nowhere, and is still an apex's touch
+                pos = np.asarray(seated.end, dtype=float)
+                # on for the rest of the leg, aimed at its corner again (the seat and the
+                # rides before it may have turned the tip a little off the leg's line)
+                ahead = np.array([corner[0] - pos[0], corner[1] - pos[1], 0.0])
+                left = float(np.linalg.norm(ahead))
+                if left > 1e-9:
+                    u = ahead / left
         return moved, pos
+
+
+ROUGH_RIDES = 3
+"""A top is taken for a scan's rough one (:class:`_TopPhase` seats the tip on it) when the
+touch from above closes more than the sensor pointing down and the contours before it rode
+over at least this many irregularities: an ideal solid's contours ride over none, or over a
+facet or two of a curved one, and its tops are explored as the paper's rules say."""
+
+
+def _on_plane(inner: Sequence[Contact], outer: Sequence[Contact], tol: float) -> bool:
+    """The tip centres of ``outer`` lie within ``tol`` of the plane fitted (least squares)
+    through those of ``inner``: a rough top's wider diamond stayed on the first one's plane,
+    where a ridge curving away falls below it by its sagitta."""
+    if len(inner) < 3 or not outer:
+        return not outer
+    a = np.asarray([x.centre for x in inner], dtype=float)
+    b = np.asarray([x.centre for x in outer], dtype=float)
+    mid = a.mean(axis=0)
+    normal = np.linalg.svd(a - mid, full_matrices=False)[2][2]
+    return bool((np.abs((b - mid) @ normal) <= tol).all())
 
 
 def _spans(contacts: Sequence[Contact], rho: float) -> bool:
