@@ -1149,9 +1149,7 @@ class Controller:
             if regained is not None:
                 break
             # not regained: back to where the slide stopped, for the paper's rules from there
-            for direction, length in reversed(legs):
-                if length > 1e-12:
-                    pos = np.asarray(self._move(pos, direction, length).end, dtype=float)
+            pos = self._retrace(pos, legs)
             if m.event == "release":  # the surface fell away: a real edge
                 return None
         if regained is None:
@@ -1626,6 +1624,15 @@ class Controller:
             )
         return None
 
+    def _retrace(self, pos: FloatArray, legs: list[tuple[FloatArray, float]]) -> FloatArray:
+        """Move back along ``legs`` (each the direction back and its length), last first, from
+        ``pos``; where the finger ends."""
+        here = np.asarray(pos, dtype=float)
+        for direction, length in reversed(legs):
+            if length > 1e-12:
+                here = np.asarray(self._move(here, direction, length).end, dtype=float)
+        return here
+
     def _move_on(self, pos: FloatArray, direction: FloatArray, length: float) -> Motion:
         """Move ``length`` along ``direction`` through losses of contact; stop at anything else."""
         return _through_releases(self._move, pos, direction, length)[0]
@@ -1744,9 +1751,7 @@ class Controller:
                 continue
             if leg == 1 and m.event == "touch" and m.distance > 0.5 * rise:
                 return m
-            for back, distance in reversed(legs):
-                if distance > 1e-12:
-                    here = np.asarray(self._move(here, back, distance).end, dtype=float)
+            self._retrace(here, legs)
             return None
         return m
 
@@ -1895,6 +1900,13 @@ class _TopPhase:
         self._c = controller
         self._rough = False
         self._seats = 0
+        self._down = 0
+
+    def _follow_down(self, m: Motion) -> _Follow:
+        """Follow the sensor pointing down, among the sensors ``m`` closed: the top's, where
+        the others are a rough top's."""
+        c = self._c
+        return _Follow(self._down, tuple(sorted(m.closed)), c._dirs[self._down].copy())
 
     def run(self, contacts: list[Contact]) -> None:
         """Approach from above over the middle of the last contour; slide round a diamond on it.
@@ -1933,7 +1945,7 @@ class _TopPhase:
         r1, r2 = float(reach[0]), float(reach[1])
         mid3 = np.array([mid[0], mid[1], 0.0])
         inner = [mid3 + d for d in (a1 * r1, a2 * r2, -a1 * r1, -a2 * r2)]
-        down = int(np.argmax(c._dirs @ -_Z))
+        self._down = down = int(np.argmax(c._dirs @ -_Z))
         f = c._follow(m.closed)
         # a scan's rough top: the tip rests on a few high points, and the sensors that close
         # are the roughness's; a finger under force control seats itself on the top
@@ -1947,7 +1959,7 @@ class _TopPhase:
         if self._rough and down in m.closed:
             # the sensor pointing down is the top's: follow it (a tilted one, the roughness's,
             # loses the top at the first slide)
-            f = _Follow(down, f.group, c._dirs[down].copy())
+            f = self._follow_down(m)
         first = len(c.contacts)
         c._record(m, f, "touch")
         pos = np.asarray(m.end, dtype=float)
@@ -1988,8 +2000,8 @@ class _TopPhase:
         the roughness's, turned from straight down; a tilted one, followed, loses the top at
         the first slide. From ``pos`` the tip lifts by :attr:`bump` (twice that when something
         blocks the step: a letter, a bump), steps each of ``steps`` along ``toward``
-        (horizontal) and presses down again, each time from ``pos``: the
-        first press that closes the sensor pointing down is returned, the tip there. None
+        (horizontal) and presses down again, each time from ``pos``: the first press that
+        closes the sensor pointing down is returned, the tip there. None
         when none does (an apex, an edge, a slanted face, where a smaller top ended), the tip
         back at ``pos``."""
         c = self._c
@@ -1998,7 +2010,6 @@ class _TopPhase:
         if size < 1e-9:
             return None
         u /= size
-        down = int(np.argmax(c._dirs @ -_Z))
         base = np.asarray(pos, dtype=float)
         for k in steps:
             for lift in (c.bump, 2.0 * c.bump):  # a letter or a bump in the way: lift more
@@ -2015,13 +2026,11 @@ class _TopPhase:
                     blocked = step.event != "none"
                     if not blocked:
                         press = c._move(here, -_Z, lift + c.bump)
-                        if press.event == "touch" and down in press.closed:
+                        if press.event == "touch" and self._down in press.closed:
                             return press
                         legs.append((_Z, press.distance))
                         here = np.asarray(press.end, dtype=float)
-                for direction, length in reversed(legs):
-                    if length > 1e-12:
-                        here = np.asarray(c._move(here, direction, length).end, dtype=float)
+                c._retrace(here, legs)
                 if not blocked:
                     break
         return None
@@ -2047,7 +2056,6 @@ class _TopPhase:
         legs = [(lead, float(np.linalg.norm(lead)), ring[0])]
         legs += [(b - a, float(np.linalg.norm(b - a)), b) for a, b in itertools.pairwise(ring)]
         moved = 0.0
-        down = int(np.argmax(c._dirs @ -_Z))
         for direction, length, corner in legs:
             u = _unit(direction)
             left = length
@@ -2067,8 +2075,8 @@ class _TopPhase:
                 if seated is None:
                     return moved, None
                 self._seats += 1
-                nf = c._follow(seated.closed)
-                f.sensor, f.group, f.r0 = down, nf.group, c._dirs[down].copy()
+                nf = self._follow_down(seated)
+                f.sensor, f.group, f.r0 = nf.sensor, nf.group, nf.r0
                 c._record(seated, f, "slide")
                 # the hop is not slid: a tip seated again and again round an apex slides
                 # nowhere, and is still an apex's touch
