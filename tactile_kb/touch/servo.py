@@ -2047,7 +2047,8 @@ class _TopPhase:
         surface ridden over, or a slide rode over something since ``rides``), a slide that
         ends early is not yet the top's end: the tip seats itself again ρ/2, ρ or 3ρ/2
         further on (:meth:`_seat`, no further than the corner), follows the sensor pointing
-        down from there and slides on. Where a smaller top ends, the press meets its slanted
+        down from there and slides on, to the next corner once a seat leaves it near this one
+        or no nearer (:data:`CORNER_RHO`). Where a smaller top ends, the press meets its slanted
         side or nothing, and the diamond ends there."""
         c = self._c
         ring = [*corners, corners[0]]
@@ -2060,6 +2061,7 @@ class _TopPhase:
             u = _unit(direction)
             left = length
             while left > 1e-9:
+                before = left
                 sm, travelled = c._slide_sampled(pos, u, f, left)
                 moved += travelled
                 left -= travelled
@@ -2085,10 +2087,17 @@ class _TopPhase:
                 # rides before it may have turned the tip a little off the leg's line)
                 ahead = np.array([corner[0] - pos[0], corner[1] - pos[1], 0.0])
                 left = float(np.linalg.norm(ahead))
-                if left > 1e-9:
-                    u = ahead / left
+                if left <= CORNER_RHO * c.rho or left >= before:
+                    break  # at the corner, or no nearer: on to the next one from here
+                u = ahead / left
         return moved, pos
 
+
+CORNER_RHO = 0.1
+"""Tip radii: a rough top's diamond (:meth:`_TopPhase._diamond`) has reached a corner when a
+seat leaves the tip this near it, or no nearer than the slide before it did (else a tip that
+drifts by a hundredth of a millimetre each way at a corner is seated there again and again);
+it goes on to the next corner from there."""
 
 ROUGH_RIDES = 3
 """A top is taken for a scan's rough one (:class:`_TopPhase` seats the tip on it) when the
