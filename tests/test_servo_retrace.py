@@ -15,7 +15,7 @@ import pytest
 import trimesh
 
 from tactile_kb.touch.finger import builtin_finger
-from tactile_kb.touch.servo import Controller, ServoParams
+from tactile_kb.touch.servo import Controller, ServoParams, _Follow
 from tactile_kb.touch.stepper import StepperWorld
 
 RHO = 0.005  # the 33-sensor finger's tip radius
@@ -85,3 +85,30 @@ def test_no_free_way_up_from_any_point_moves_nothing() -> None:
         c._trail.popleft()
     assert c._retrace_up(0.080) is None
     assert c.motions == motions
+
+
+def test_pinched_between_a_ceiling_and_a_floor_the_way_out_is_sideways() -> None:
+    # a C-shaped block: a floor and a ceiling joined at the back, the slot between them 0.5 mm
+    # higher than the tip's diameter. The finger touched the ceiling from below; leaving it straight
+    # down meets the floor at once, and the turn towards +z that follows a blocked step is
+    # then no direction at all: the finger leaves sideways, out of the slot's mouth
+    floor_top, ceiling_low = 0.020, 0.020 + 2 * RHO + 0.0005
+    c_block = trimesh.util.concatenate(
+        [
+            _box((-0.05, -0.05, 0.0), (0.05, 0.05, floor_top)),
+            _box((-0.05, -0.05, ceiling_low), (0.05, 0.05, 0.04)),
+            _box((0.03, -0.05, floor_top), (0.05, 0.05, ceiling_low)),
+        ]
+    )
+    c = Controller(StepperWorld(c_block, builtin_finger("33")), ServoParams())
+    start = np.array([-0.09, 0.0, floor_top + RHO + 0.0002])
+    m = c._move(start, np.array([1.0, 0.0, 0.0]), 0.07)  # into the slot
+    assert m.event == "none"
+    # the ceiling 0.3 mm over the tip, touched by a sensor facing up (a head indexed upwards)
+    c._record(m, _Follow(0, (0,), np.array([0.0, 0.0, 1.0])), "touch")
+    goal = np.array([0.09, 0.0, 0.080])
+    assert c._go_round(goal, "a test")
+    assert c._last_pos == pytest.approx(tuple(goal))
+    trail = np.asarray(c._trail)
+    assert trail[:, 0].min() < -0.05 - RHO + 1e-6  # out of the slot's mouth, at x < -50 mm
+    assert all(c.world.distance(tuple(p)) >= RHO - 1e-6 for p in trail)

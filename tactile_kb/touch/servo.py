@@ -894,7 +894,12 @@ class Controller:
                 here = np.asarray(m.end, dtype=float)
                 if m.event in ("none", "release"):
                     break
-                back = _unit(back + _Z)
+                back = back + _Z
+                if float(np.linalg.norm(back)) < 1e-6:  # it was straight down: out sideways
+                    back = np.array([here[0] - hint.centre[0], here[1] - hint.centre[1], 0.0])
+                    if float(np.linalg.norm(back)) < 1e-9:
+                        back = np.array([1.0, 0.0, 0.0])
+                back = _unit(back)
         if self.world.sense(_v3(here)):  # still on a surface: away from the middle
             centre = np.asarray(hint.centre, dtype=float)
             away = _unit(np.array([here[0] - centre[0], here[1] - centre[1], 0.0]))
