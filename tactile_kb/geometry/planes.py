@@ -2049,7 +2049,8 @@ def explained_faces(
     examined fewest contacts first and removed one at a time while the others still close;
     the table is never removed, and faces are only looked for against faces at least
     ``geometry.edge_min_width`` tip radii wide (next to narrow faces only, as on a curved
-    object, every face stays).
+    object, every face stays), or against one face alone, every centre ρ or more inside its
+    edges (:func:`_within_face`: a bump on a small top; a facet lies by its neighbours').
 
     Parameters
     ----------
@@ -2133,8 +2134,12 @@ def explained_faces(
             if not near.any():
                 continue
             against = np.flatnonzero(near.any(axis=0))
-            if float(widths[against].max()) < geo.edge_min_width * rho:
-                continue  # only narrow faces around: a curved object's facets stay
+            if float(widths[against].max()) < geo.edge_min_width * rho and not (
+                len(against) == 1 and _within_face(c, poly, int(against[0]), rho)
+            ):
+                # only narrow faces around: a curved object's facets stay; but not a spot
+                # against one face alone, ρ or more inside its edges (a bump on a small top)
+                continue
             inset = np.zeros(len(c))
             edge_inset = np.zeros(len(c))  # a rounded edge's, as for a face of the object
             for i in range(len(c)):
@@ -2171,6 +2176,19 @@ def explained_faces(
             return sorted(removed)
         kept.remove(best)
         removed.append(best)
+
+
+def _within_face(c: FloatArray, poly: Polyhedron, face: int, margin: float) -> bool:
+    """Whether the points ``c``, projected on ``poly``'s face ``face``, all lie inside its
+    polygon by at least ``margin`` from every edge."""
+    loop = poly.vertices[list(poly.faces[face])]
+    if len(loop) < 3:
+        return False
+    n = poly.normals[face]
+    inward = np.cross(n, np.roll(loop, -1, axis=0) - loop)  # left of each edge, seen from outside
+    inward /= np.maximum(np.linalg.norm(inward, axis=1), 1e-12)[:, None]
+    depth = np.einsum("ijk,jk->ij", c[:, None, :] - loop[None, :, :], inward)
+    return bool(depth.min() >= margin)
 
 
 EXPLAINED_FACING_DEG = 20.0
