@@ -27,9 +27,11 @@ from typing import Any
 
 import numpy as np
 import trimesh
+from scipy.cluster.hierarchy import DisjointSet
 
 from tactile_kb.errors import ObjectError
 from tactile_kb.settings import DEFAULTS, current
+from tactile_kb.types import FloatArray
 
 __all__ = [
     "MAX_SIZE",
@@ -225,7 +227,7 @@ def load_object(obj: ObjectLike, *, name: str | None = None) -> trimesh.Trimesh:
         raise ObjectError(
             f"{label}: not a solid: {float(extent.min()) * 1000:.3g} mm thick "
             f"(at least {current().objects.min_size * 1000:g} mm needed; a single plane, a line or a point set "
-            "cannot be touched all round): degenerate mesh"
+            f"cannot be touched all round): degenerate mesh{_units_hint(extent, units)}"
         )
     if not mesh.is_watertight:
         mesh = _close(mesh, notes)
@@ -237,8 +239,7 @@ def load_object(obj: ObjectLike, *, name: str | None = None) -> trimesh.Trimesh:
     if float(extent.max()) > current().objects.max_size:
         raise ObjectError(
             f"{label}: larger than the workspace: {float(extent.max()):.3g} m across "
-            f"(at most {current().objects.max_size:g} m; is the mesh in millimetres? then read "
-            'it with the units mm: --units mm, or objects.units = "mm")'
+            f"(at most {current().objects.max_size:g} m){_units_hint(extent, units)}"
         )
     lo, hi = mesh.bounds
     if (
@@ -263,6 +264,7 @@ def load_object(obj: ObjectLike, *, name: str | None = None) -> trimesh.Trimesh:
 
 UNITS: dict[str, float] = {"m": 1.0, "cm": 0.01, "mm": 0.001, "in": 0.0254}
 """Metres per unit of the length units a mesh file may be in (setting ``objects.units``)."""
+UNIT_NAMES = {"m": "the metre", "cm": "the centimetre", "mm": "the millimetre", "in": "the inch"}
 
 
 def _rest_stable(
@@ -367,9 +369,29 @@ def _separate_touching(mesh: trimesh.Trimesh) -> trimesh.Trimesh:
     return out
 
 
-MAX_PARTS = 64
+MAX_PARTS = 256
 """At most this many bodies of a mesh (the largest) are tried as parts of one object
 (:func:`_one_object`); smaller ones can only be specks."""
+
+
+def _units_hint(extent: FloatArray, units: str) -> str:
+    """For a mesh too large or too thin as read in ``units``: the other units in which it
+    would be an object the finger can explore (``objects.min_size`` to ``objects.max_size``),
+    the likeliest (nearest a 10 cm object) first; "" when there is none."""
+    limits = current().objects
+    raw = np.asarray(extent, dtype=float) / UNITS[units]
+    fits = [
+        (abs(math.log(float(raw.max()) * per / 0.1)), unit, float(raw.max()) * per)
+        for unit, per in UNITS.items()
+        if unit != units
+        and limits.min_size <= float(raw.min()) * per
+        and float(raw.max()) * per <= limits.max_size
+    ]
+    if not fits:
+        return ""
+    ways = " or ".join(f"--units {u} ({size * 100:.3g} cm across)" for _, u, size in sorted(fits))
+    unit = UNIT_NAMES[units]
+    return f"; if its unit is not {unit}, read it with {ways}, or the setting objects.units"
 
 
 def _one_object(mesh: trimesh.Trimesh, label: str, notes: list[str]) -> trimesh.Trimesh:
@@ -388,27 +410,20 @@ def _one_object(mesh: trimesh.Trimesh, label: str, notes: list[str]) -> trimesh.
     volumes = np.array([float(np.prod(b.extents)) for b in bodies])
     main = int(np.argmax(sizes))
     reach = limits.join_fraction * sizes[main]
-    # only the largest bodies may be parts (each pair's gap is measured once): a mesh of
-    # thousands of loose triangles would otherwise take hours
+    # only the largest bodies may be parts: a mesh of thousands of loose triangles would
+    # otherwise take hours; pairs whose bounding boxes lie further apart than ``reach`` are
+    # never measured, nor a pair already joined through others
     candidates = [int(k) for k in np.argsort(-sizes)[:MAX_PARTS]]
-    group = [main]
-    measured: set[tuple[int, int]] = set()
-    grown = True
-    while grown:
-        grown = False
-        for k in candidates:
-            if k in group:
-                continue
-            near = False
-            for g in group:
-                if (k, g) not in measured:
-                    measured.add((k, g))
-                    near = _gap(bodies[k], bodies[g], reach) <= reach
-                    if near:
-                        break
-            if near:
-                group.append(k)
-                grown = True
+    lo = np.asarray([bodies[k].bounds[0] for k in candidates], dtype=float) - reach
+    hi = np.asarray([bodies[k].bounds[1] for k in candidates], dtype=float)
+    boxes_meet = np.all(lo[:, None, :] <= hi[None, :, :], axis=2)
+    boxes_meet &= boxes_meet.T
+    joined_up = DisjointSet(candidates)
+    for i, j in zip(*np.nonzero(np.triu(boxes_meet, 1)), strict=True):
+        a, b = candidates[int(i)], candidates[int(j)]
+        if not joined_up.connected(a, b) and _gap(bodies[a], bodies[b], reach) <= reach:
+            joined_up.merge(a, b)
+    group = sorted(joined_up.subset(main), key=lambda k: (-sizes[k], k))
     others = [k for k in range(len(bodies)) if k not in group]
     large = [
         k
@@ -452,10 +467,13 @@ def _one_object(mesh: trimesh.Trimesh, label: str, notes: list[str]) -> trimesh.
 
 def _gap(a: trimesh.Trimesh, b: trimesh.Trimesh, reach: float) -> float:
     """The distance between bodies ``a`` and ``b`` (from at most 2000 vertices of each to the
-    other's surface), or infinity when their bounding boxes are further apart than ``reach``."""
+    other's surface; 0 when closed bodies share volume, :func:`_overlap`), or infinity when
+    their bounding boxes are further apart than ``reach``."""
     (alo, ahi), (blo, bhi) = a.bounds, b.bounds
     if bool(np.any(alo - reach > bhi) or np.any(blo - reach > ahi)):
         return math.inf
+    if a.is_watertight and b.is_watertight and _overlap(a, b):
+        return 0.0  # the pieces of a convex decomposition, say: neither's vertices need be near
     best = math.inf
     for one, other in ((a, b), (b, a)):
         pts = np.asarray(one.vertices, dtype=float)
@@ -464,6 +482,18 @@ def _gap(a: trimesh.Trimesh, b: trimesh.Trimesh, reach: float) -> float:
         _, dist, _ = trimesh.proximity.closest_point(other, pts)  # type: ignore[no-untyped-call]
         best = min(best, float(np.min(dist)))
     return best
+
+
+def _overlap(a: trimesh.Trimesh, b: trimesh.Trimesh) -> bool:
+    """Whether closed bodies ``a`` and ``b`` share volume (their intersection, by manifold3d)."""
+    (alo, ahi), (blo, bhi) = a.bounds, b.bounds
+    if bool(np.any(alo >= bhi) or np.any(blo >= ahi)):
+        return False
+    try:
+        common = trimesh.boolean.intersection([a, b], engine="manifold")
+    except Exception:  # the engine refused them: their distance decides
+        return False
+    return isinstance(common, trimesh.Trimesh) and len(common.faces) > 0 and bool(common.volume > 0)
 
 
 def _close(mesh: trimesh.Trimesh, notes: list[str]) -> trimesh.Trimesh:
@@ -476,8 +506,17 @@ def _close(mesh: trimesh.Trimesh, notes: list[str]) -> trimesh.Trimesh:
         notes.append("holes in the mesh filled (trimesh.repair.fill_holes)")
         return repaired
     trimesh.repair.fix_normals(mesh)  # type: ignore[no-untyped-call]
-    boundary = int(np.sum(np.bincount(mesh.edges_unique_inverse) == 1))
+    uses = np.bincount(mesh.edges_unique_inverse)
+    flaws = [
+        f"{count} {what}"
+        for count, what in (
+            (int(np.sum(uses == 1)), "boundary edges trimesh cannot fill"),
+            (int(np.sum(uses > 2)), "edges shared by more than two triangles"),
+        )
+        if count
+    ]
     notes.append(
-        f"the mesh is open ({boundary} boundary edges trimesh cannot fill); explored as it is"
+        f"the mesh is not closed ({', '.join(flaws) or 'trimesh finds it not watertight'}); "
+        "explored as it is"
     )
     return mesh

@@ -108,10 +108,31 @@ def test_a_mesh_trimesh_cannot_close_is_explored_as_it_is() -> None:
     mesh = load_object(open_cup, name="cup.stl")
     assert not mesh.is_watertight
     (note,) = mesh.metadata[NOTES_KEY]
-    assert note == "the mesh is open (48 boundary edges trimesh cannot fill); explored as it is"
+    assert note == (
+        "the mesh is not closed (48 boundary edges trimesh cannot fill); explored as it is"
+    )
     rec = StepperExplorer(completer=model_completer()).explore(mesh, seed=0)
     assert note in rec.notes
     assert rec.touches > 0
+
+
+def test_a_mesh_with_an_edge_of_three_triangles_is_said_not_closed_for_that() -> None:
+    # a closed box with a fin: one more triangle on one of its edges, an edge of three
+    # triangles and no boundary (as in robosuite's bottle)
+    box = trimesh.creation.box((0.05, 0.04, 0.03))
+    a, b = box.edges_unique[0]
+    middle = (box.vertices[a] + box.vertices[b]) / 2
+    fin_tip = middle * 1.5  # out from the box's centre, beyond the edge
+    vertices = np.vstack([box.vertices, fin_tip])
+    faces = np.vstack([box.faces, [[a, b, len(box.vertices)]]])
+    finned = trimesh.Trimesh(vertices, faces, process=False)
+    assert int(np.sum(np.bincount(finned.edges_unique_inverse) > 2)) == 1
+    assert int(np.sum(np.bincount(finned.edges_unique_inverse) == 1)) == 2  # the fin's own
+    mesh = load_object(finned, name="fin.stl")
+    assert mesh.metadata[NOTES_KEY] == [
+        "the mesh is not closed (2 boundary edges trimesh cannot fill, 1 edges shared by more "
+        "than two triangles); explored as it is"
+    ]
 
 
 def test_degenerate_mesh() -> None:
@@ -122,8 +143,12 @@ def test_degenerate_mesh() -> None:
 
 def test_too_large_and_outside_the_workspace() -> None:
     big = trimesh.creation.box((MAX_SIZE * 2, 0.05, 0.05))
-    with pytest.raises(ObjectError, match=r"larger than the workspace.*millimetres"):
+    with pytest.raises(ObjectError) as refused:
         load_object(big)
+    # 1.2 m by 5 cm: in no other unit an object the finger can explore, so no unit is offered
+    assert str(refused.value).endswith(
+        f"larger than the workspace: {MAX_SIZE * 2:.3g} m across (at most {MAX_SIZE:g} m)"
+    )
     far = trimesh.creation.box((0.05, 0.05, 0.05))
     far.apply_translation((3.0, 0.0, 0.0))
     with pytest.raises(ObjectError, match="outside the workspace"):
@@ -335,6 +360,27 @@ def test_parts_of_one_object_are_joined_and_far_bodies_refused() -> None:
         load_object(trimesh.util.concatenate([cup, block]), name="mug")
 
 
+def test_pieces_that_overlap_are_one_object_however_many() -> None:
+    # a cross of two bars: no corner of either lies near the other's surface, yet they overlap
+    a = trimesh.creation.box((0.10, 0.02, 0.02))
+    b = trimesh.creation.box((0.02, 0.10, 0.02))
+    cross = load_object(trimesh.util.concatenate([a, b]), name="cross")
+    assert cross.extents == pytest.approx((0.10, 0.10, 0.02), abs=1e-6)
+    assert cross.volume == pytest.approx(a.volume + b.volume - 0.02**3, rel=1e-6)
+    # a slab decomposed into 100 overlapping cubes (a convex decomposition of more pieces
+    # than MAX_PARTS once allowed): one object, their union
+    cubes = []
+    for i in range(10):
+        for j in range(10):
+            c = trimesh.creation.box((0.01, 0.01, 0.01))
+            c.apply_translation((0.008 * i, 0.008 * j, 0.0))
+            cubes.append(c)
+    slab = load_object(trimesh.util.concatenate(cubes), name="slab")
+    assert slab.extents == pytest.approx((0.082, 0.082, 0.01), abs=1e-6)
+    assert slab.volume == pytest.approx(0.082 * 0.082 * 0.01, rel=1e-6)
+    assert slab.metadata[NOTES_KEY][0].startswith("100 parts under")
+
+
 def test_thousands_of_loose_triangles_beside_an_object_are_specks() -> None:
     # a scan's debris: 2000 loose triangles of about a millimetre in and around a box; only the
     # largest bodies are tried as parts (MAX_PARTS), the rest are specks
@@ -372,8 +418,31 @@ def test_a_mesh_in_other_units_is_scaled_to_metres(units: str, per_metre: float)
 
 def test_a_millimetre_mesh_read_as_metres_names_the_units_setting() -> None:
     mesh = trimesh.creation.box((80.0, 60.0, 40.0))
-    with pytest.raises(ObjectError, match=r"larger than the workspace.*--units mm"):
+    with pytest.raises(ObjectError) as refused:
         load_object(mesh)
+    assert str(refused.value).endswith(
+        "larger than the workspace: 80 m across (at most 0.6 m); if its unit is not the metre, "
+        "read it with --units mm (8 cm across), or the setting objects.units"
+    )
+
+
+def test_a_mesh_of_unit_size_is_offered_the_units_it_fits_in() -> None:
+    # a cube one unit across (a simulator's unit cube): 1 m is too large, 1 mm too thin; as
+    # inches or centimetres it is an object, the inch (nearer 10 cm) named first
+    cube = trimesh.creation.box((1.0, 1.0, 1.0))
+    offer = "--units in (2.54 cm across) or --units cm (1 cm across), or the setting objects.units"
+    with pytest.raises(ObjectError) as refused:
+        load_object(cube, name="cube.obj")
+    assert str(refused.value) == (
+        "cube.obj: larger than the workspace: 1 m across (at most 0.6 m); if its unit is not "
+        f"the metre, read it with {offer}"
+    )
+    with settings.override(objects={"units": "mm"}), pytest.raises(ObjectError) as refused:
+        load_object(cube, name="cube.obj")
+    assert str(refused.value).startswith("cube.obj: not a solid: 1 mm thick")
+    assert str(refused.value).endswith(f"if its unit is not the millimetre, read it with {offer}")
+    with settings.override(objects={"units": "in"}):
+        assert load_object(cube).extents == pytest.approx((0.0254,) * 3)
 
 
 def _tilted(mesh: trimesh.Trimesh, seed: int) -> trimesh.Trimesh:
