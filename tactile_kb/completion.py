@@ -495,9 +495,10 @@ def _beyond_model_probes(model: ObjectModel, rho: float) -> list[Probe]:
     height: a part of the object lower than the first layer (an L-block's foot, standing on
     its end) or higher than the last is never touched, and the envelope of the rest stops
     short of the hint there. One probe from that side just above the table, aimed at the
-    hint's middle: it meets the part, or the face the model has. A hint is an estimate (a
-    scan's floating specks widen it): like the path's, these probes test the model and never
-    hold the completion open.
+    hint's middle, and one just under the model's top (1.5 ρ below its highest corner): they
+    meet the part (a lid's handles, higher than the last layer), or the face the model has.
+    A hint is an estimate (a scan's floating specks widen it): like the path's, these probes
+    test the model and never hold the completion open.
     """
     params = model.record.params
     keys = [f"hint_{e}_{a}" for e in ("lo", "hi") for a in "xyz"]
@@ -509,16 +510,28 @@ def _beyond_model_probes(model: ObjectModel, rho: float) -> list[Probe]:
     corners = np.array([[x, y] for x in (lo[0], hi[0]) for y in (lo[1], hi[1])])
     mid = 0.5 * (lo + hi)
     reach = float(np.linalg.norm(hi[:2] - lo[:2])) + 4.0 * rho
+    top = float(poly.vertices[:, 2].max())
     out = []
     for d in np.array([[1.0, 0.0], [0.0, 1.0], [-1.0, 0.0], [0.0, -1.0]]):
         if float((corners @ d).max() - (poly.vertices[:, :2] @ d).max()) <= 2.0 * rho:
             continue
+        towards = _name(np.append(d, 0.0))
         out.append(
             Probe(
                 (float(mid[0]), float(mid[1]), 1.5 * rho),
                 (float(d[0]), float(d[1]), 0.0),
                 reach,
-                f"{_HINT} towards {_name(np.append(d, 0.0))}",
+                f"{_HINT} towards {towards}",
+                middle=True,
+            )
+        )
+        # and just under the model's top: a part higher than the last layer (a lid's handles)
+        out.append(
+            Probe(
+                (float(mid[0]), float(mid[1]), top - 1.5 * rho),
+                (float(d[0]), float(d[1]), 0.0),
+                reach,
+                f"{_HINT} towards {towards}, under the top",
                 middle=True,
             )
         )

@@ -184,6 +184,25 @@ def test_explore_says_on_stderr_why_the_model_is_not_closed(
     assert "warning" not in capsys.readouterr().err  # closed: nothing to warn about
 
 
+def test_classify_warns_on_stderr_when_its_answer_rests_on_an_open_exploration(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    # the 4-sensor finger cannot feel the box's top: as explore says, so does classify
+    path = tmp_path / "box.stl"
+    solids.box(0.06, 0.05, 0.04).export(path)
+    assert main(["explore", str(path), "--finger", "4", "--out", str(tmp_path / "r.json")]) == 0
+    said = [line for line in capsys.readouterr().err.splitlines() if "warning:" in line]
+    assert len(said) == 1
+    assert said[0].endswith("still open: open towards +z")
+    assert main(["classify", str(path), "--finger", "4"]) == 0
+    captured = capsys.readouterr()
+    warnings = [line for line in captured.err.splitlines() if "warning:" in line]
+    assert warnings == [said[0].replace("tactile-kb explore:", "tactile-kb classify:")]
+    assert captured.out.startswith(f"{path}- OBJECT IS")  # the answer is still given
+    assert main(["classify", str(path)]) == 0
+    assert "warning" not in capsys.readouterr().err  # closed: nothing to warn about
+
+
 def test_records_without_an_ending_still_load(tmp_path: Path) -> None:
     rec = StepperExplorer(completer=model_completer()).explore(solids.box(0.06, 0.05, 0.04), seed=0)
     data = json.loads(rec.to_json())
@@ -357,3 +376,30 @@ def test_a_scans_second_height_on_a_rounded_edge_is_tested_half_way() -> None:
     # the scan touched with declared noise: its detail may be the noise's, nothing asked
     noisy = build_model(scan.model_copy(update={"noise": 0.0005}))
     assert not [p for p in completion_probes(noisy) if "rounded edge" in p.reason]
+
+
+def _box(lo: tuple[float, float, float], hi: tuple[float, float, float]) -> trimesh.Trimesh:
+    b = trimesh.creation.box(np.subtract(hi, lo))
+    b.apply_translation(np.add(lo, hi) / 2)
+    return b
+
+
+@pytest.mark.parametrize("lug_height", [0.012, 0.02])
+def test_lugs_higher_than_the_last_layer_are_found_under_the_top(lug_height: float) -> None:
+    # a 10 cm cube with a lug 3 cm long on each of two sides, flush with its top: the layers
+    # lie below the lugs and the touch from above lands on the cube's top, so the model is a
+    # cube narrower than the hint; a probe from each such side just under the top meets a lug
+    top = 0.1
+    parts = [
+        _box((-0.05, -0.05, 0.0), (0.05, 0.05, top)),
+        _box((0.05, -0.02, top - lug_height), (0.08, 0.02, top)),
+        _box((-0.08, -0.02, top - lug_height), (-0.05, 0.02, top)),
+    ]
+    lidded = trimesh.boolean.union(parts, engine="manifold")
+    result = classify(lidded, rules="polyhedra", seed=0)
+    centres = np.asarray([c.centre for c in result.record.contacts])
+    rho = result.record.tip_radius
+    on_lugs = (np.abs(centres[:, 0]) > 0.05 + rho) & (centres[:, 2] > top - lug_height)
+    assert on_lugs.any()
+    assert result.decision.label == "composed_of_boxes"
+    assert classify(lidded, rules="parallelepipeds", seed=0).decision.label == "not_hexahedron"

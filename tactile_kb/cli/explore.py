@@ -115,6 +115,12 @@ def _classify(args: argparse.Namespace) -> int:
             continue
         for note in notices(result.record):
             print(f"tactile-kb classify: note: {item}: {note}", file=sys.stderr, flush=True)
+        if result.record.open_ending:  # answered, but from an exploration that did not close
+            print(
+                f"tactile-kb classify: warning: {item}: {result.record.open_ending}",
+                file=sys.stderr,
+                flush=True,
+            )
         _emit(result, args.json)  # the answer is out before any picture is drawn
         if pictures:
             from tactile_kb.objects import load_object
