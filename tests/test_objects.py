@@ -118,7 +118,7 @@ def test_a_mesh_trimesh_cannot_close_is_explored_as_it_is() -> None:
 
 def test_a_mesh_with_an_edge_of_three_triangles_is_said_not_closed_for_that() -> None:
     # a closed box with a fin: one more triangle on one of its edges, an edge of three
-    # triangles and no boundary (as in robosuite's bottle)
+    # triangles (as in robosuite's bottle), and the fin's own two free edges
     box = trimesh.creation.box((0.05, 0.04, 0.03))
     a, b = box.edges_unique[0]
     middle = (box.vertices[a] + box.vertices[b]) / 2

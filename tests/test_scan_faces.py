@@ -136,8 +136,8 @@ def _small_box_with_a_spot(x: float, height: float) -> tuple[list[Face], np.ndar
 
 
 def test_a_bump_on_a_small_top_is_explained_where_a_facet_by_an_edge_is_not() -> None:
-    # a spot 0.8 mm above the middle of a 1.2 × 1.6 cm top (a bump under the tip, a sensor 18° off
-    # firing): the top explains it, though every face is narrower than 4 ρ
+    # a spot 0.8 mm above the middle of a 1.2 × 1.6 cm top (a bump under the tip, a sensor
+    # 18° off firing): the top explains it, though every face is narrower than 4 ρ
     every, centres, supporting = _small_box_with_a_spot(0.0, 0.0008)
     assert explained_faces(every, supporting, centres, RHO) == [5]
     # 4 mm above: more than a bump's relief and the faces' detail, a face

@@ -89,9 +89,9 @@ def test_no_free_way_up_from_any_point_moves_nothing() -> None:
 
 def test_pinched_between_a_ceiling_and_a_floor_the_way_out_is_sideways() -> None:
     # a C-shaped block: a floor and a ceiling joined at the back, the slot between them 0.5 mm
-    # higher than the tip's diameter. The finger touched the ceiling from below; leaving it straight
-    # down meets the floor at once, and the turn towards +z that follows a blocked step is
-    # then no direction at all: the finger leaves sideways, out of the slot's mouth
+    # higher than the tip's diameter. The finger touched the ceiling from below; leaving it
+    # straight down meets the floor at once, and the turn towards +z that follows a blocked
+    # step is then no direction at all: the finger leaves sideways, out of the slot's mouth
     floor_top, ceiling_low = 0.020, 0.020 + 2 * RHO + 0.0005
     c_block = trimesh.util.concatenate(
         [
