@@ -1377,7 +1377,10 @@ class ModelCompleter:
             for p in completion_probes(model, height_gap=self.params.height_gap)
             if self._allowed(p)
         ]
-        open_items = [p.reason for p in wanted if not p.reason.startswith(_TESTS)]
+        # each item once, though probes at two heights or ends share its reason
+        open_items = list(
+            dict.fromkeys(p.reason for p in wanted if not p.reason.startswith(_TESTS))
+        )
         if model.polyhedron is None and not wanted:
             open_items = [model.open_reason or "the model is open"]
         attempts = self.params.budget()[2]

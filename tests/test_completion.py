@@ -401,5 +401,9 @@ def test_lugs_higher_than_the_last_layer_are_found_under_the_top(lug_height: flo
     rho = result.record.tip_radius
     on_lugs = (np.abs(centres[:, 0]) > 0.05 + rho) & (centres[:, 2] > top - lug_height)
     assert on_lugs.any()
+    # what stayed open (the lugs' ends, touched at one height) is named once each, though
+    # its probes at two heights share their reason
+    assert result.record.unreachable
+    assert len(set(result.record.unreachable)) == len(result.record.unreachable)
     assert result.decision.label == "composed_of_boxes"
     assert classify(lidded, rules="parallelepipeds", seed=0).decision.label == "not_hexahedron"
