@@ -1753,7 +1753,10 @@ def edge_faces(
     the others' polyhedron grown by ρ is at most ``rounding`` × the width of the widest face it
     lies against (the largest rounding of such an edge penetrates by about its radius) plus
     :data:`EDGE_SIGMAS` × ``noise``/√m, and that face is at least
-    :data:`EDGE_MIN_WIDTH` tip radii wide. Only faces whose centres span no plane of their own
+    :data:`EDGE_MIN_WIDTH` tip radii wide. A centre lies against a face within ρ/2 of its
+    grown plane, or against two faces as deep below both their grown planes as a tip on
+    their edge rounded by ``rounding`` × the narrower one's width sinks
+    (:func:`_sunk_by_rounding`). Only faces whose centres span no plane of their own
     (one contact, or contacts along a line) and no more touched than the faces they lie
     against (an edge is touched in passing, a face is explored) are candidates; they are
     removed one at a time, those with fewest contacts first, while the others still close; at most ``max_faces`` faces are examined (a curved
@@ -1848,7 +1851,9 @@ def edge_faces(
             # faces it lies against: those near it, and at a sharp edge those of the edge
             acute, at_edge = _acute_penetration(c, poly, rho)
             penetration = np.minimum(penetration, acute)
-            near = (np.abs(q @ poly.normals.T - grown) <= 0.5 * rho + 1e-9) | at_edge
+            depth = np.abs(q @ poly.normals.T - grown)
+            near = (depth <= 0.5 * rho + 1e-9) | at_edge
+            near |= _sunk_by_rounding(depth, poly, rho, rounding, widths, others)
             against = [others[int(poly.plane_index[fi])] for fi in np.flatnonzero(near.any(0))]
             # the widest of them: next to it may lie another edge face, not yet removed
             width = max((widths.get(j, 0.0) for j in against), default=0.0)
@@ -1877,6 +1882,40 @@ def edge_faces(
             return sorted(removed)
         kept.remove(best)
         removed.append(best)
+
+
+def _sunk_by_rounding(
+    depth: FloatArray,
+    poly: Polyhedron,
+    rho: float,
+    rounding: float,
+    widths: dict[int, float],
+    others: list[int],
+) -> NDArray[np.bool_]:
+    """(centres, planes of ``poly``): the planes each tip centre lies against as a tip on a
+    rounded edge of two of them, sunk ``depth`` below their planes moved out by ρ.
+
+    A tip resting on an edge rounded with radius r, between faces whose normals are θ apart,
+    has its centre (ρ + r)(1 − cos α) below the grown plane of a face whose normal is α from
+    the tip's direction, the two α summing to θ: (ρ + r)(1 − cos θ/2) below both where it
+    rests half way round (3.8 mm at a box's edge for ρ = 5 mm and r = 8 mm). ρ/2 is allowed
+    on top, as for a single plane, which also takes in a tip somewhat off the middle. r is at
+    most ``rounding`` × the narrower face's width (a rounding is no wider than its faces).
+    Only edges whose faces meet at 60° or more count (``ACUTE_COS``: a spike's faces, wide
+    far from its tip, would explain a small face cutting it off)."""
+    out = np.zeros(depth.shape, dtype=bool)
+    if len(depth) == 0 or rounding <= 0:
+        return out
+    w = np.asarray([widths.get(others[int(j)], 0.0) for j in poly.plane_index], dtype=float)
+    cos = np.clip(poly.normals @ poly.normals.T, -1.0, 1.0)
+    half = np.sqrt((1.0 + cos) / 2.0)  # cos(θ/2)
+    allowed = 0.5 * rho + (rho + rounding * np.minimum(w[:, None], w[None, :])) * (1.0 - half)
+    np.fill_diagonal(allowed, -1.0)
+    allowed[cos < ACUTE_COS] = -1.0
+    for i in np.flatnonzero((depth > 0.5 * rho).any(axis=1)):
+        pair = (depth[i][:, None] <= allowed) & (depth[i][None, :] <= allowed)
+        out[i] = pair.any(axis=1)
+    return out
 
 
 EDGE_FACING = 2.0
