@@ -25,12 +25,21 @@ to a CSV file as it comes (the jobs run in a shuffled order, so an interrupted r
 fair sample), and ``--summarize FILE`` prints the figures of such a file. ``--reverse`` runs
 the shuffled jobs from the last one back: a second process started beside a first one (each
 with its own ``--log``) meets it half-way, and the two logs together hold every outcome.
+
+``--records DIR`` also saves every exploration record there (``DIR/index.csv`` names them);
+``--rejudge DIR`` classifies those records again with the code as it is now, without
+exploring, and prints every answer that changed (in seconds for a whole draw). That is the
+final answer exactly for a change of what follows the exploration, and a first screen for a
+change of the model, which the completion also consults: the exploration itself would then
+change where its probes do, and only a full run tells.
 """
 
 from __future__ import annotations
 
 import argparse
 import csv
+import dataclasses
+import hashlib
 import multiprocessing
 import statistics
 import sys
@@ -47,7 +56,8 @@ from bench_accuracy import FAMILIES, NOISE, faces_to_touch
 
 from tactile_kb.objects import load_object
 from tactile_kb.perturb import perturb
-from tactile_kb.pipeline import classify
+from tactile_kb.pipeline import classify, classify_record
+from tactile_kb.record import ExplorationRecord
 from tactile_kb.touch.explorers import available_explorers
 
 REAL = Path(__file__).resolve().parent.parent / "tests" / "data" / "real"
@@ -70,6 +80,7 @@ class Job:
     noise: float
     explorer: str
     faces: int
+    records: Path | None = None
 
 
 @dataclass(frozen=True)
@@ -110,11 +121,21 @@ def _label_for(rules: str, poly_label: str, mesh: trimesh.Trimesh) -> str | None
     return "other_hexahedron" if faces_to_touch(mesh) + 1 == 6 else "not_hexahedron"
 
 
+def record_name(explorer: str, group: str, name: str, rules: str, noise: float) -> str:
+    """The file name of a case's saved record (``--records``): a digest of what makes the case."""
+    key = f"{explorer}|{group}|{name}|{rules}|{noise!r}"
+    return hashlib.sha1(key.encode()).hexdigest()[:16] + ".json"
+
+
 def _classify(mesh: trimesh.Trimesh, job: Job) -> tuple[str, int, float]:
     t0 = time.perf_counter()
     try:
         r = classify(mesh, rules=job.rules, explorer=job.explorer, noise=job.noise, seed=0)
         got, touches = r.decision.label, r.record.touches
+        if job.records is not None:
+            r.record.save(
+                job.records / record_name(job.explorer, job.group, job.name, job.rules, job.noise)
+            )
     except Exception as exc:  # a benchmark reports failures, it does not stop on them
         got, touches = f"error: {type(exc).__name__}: {exc}"[:200], 0
     return got, touches, time.perf_counter() - t0
@@ -270,6 +291,58 @@ def read_log(path: Path) -> list[Outcome]:
         ]
 
 
+INDEX = "index.csv"
+"""The list of a ``--records`` directory's records: one row per case, its outcome's fields."""
+
+
+def _rejudge_one(job: tuple[Path, dict[str, str]]) -> tuple[dict[str, str], str]:
+    folder, row = job
+    path = folder / record_name(
+        row["explorer"], row["group"], row["name"], row["rules"], float(row["noise"])
+    )
+    try:
+        got = classify_record(ExplorationRecord.load(path), rules=row["rules"]).decision.label
+    except Exception as exc:  # a benchmark reports failures, it does not stop on them
+        got = f"error: {type(exc).__name__}: {exc}"[:200]
+    return row, got
+
+
+def rejudge(folder: Path, workers: int) -> None:
+    """Classify the records saved with ``--records`` again; print what changed, per group."""
+    index = folder / INDEX
+    if not index.is_file():
+        raise SystemExit(f"{index}: no such file (save records with --records {folder})")
+    with index.open(newline="") as f:
+        rows = [r for r in csv.DictReader(f) if not r["got"].startswith("error")]
+    t0 = time.perf_counter()
+    if workers > 1:
+        with multiprocessing.get_context("fork").Pool(workers) as pool:
+            done = list(pool.imap_unordered(_rejudge_one, [(folder, r) for r in rows], 4))
+    else:
+        done = [_rejudge_one((folder, r)) for r in rows]
+    groups: dict[tuple[str, str], list[int]] = {}
+    changed = []
+    for row, got in done:
+        was, now = row["got"] == row["label"], got == row["label"]
+        tally = groups.setdefault((row["explorer"], row["group"]), [0, 0, 0])
+        tally[0] += was
+        tally[1] += now
+        tally[2] += 1
+        if got != row["got"]:
+            tag = "gained" if now else "lost" if was else "changed"
+            changed.append(
+                f"  {tag}: [{row['explorer']} {row['group']} {row['rules']} noise "
+                f"{float(row['noise']):g}] {row['name']}: want {row['label']}, "
+                f"was {row['got']}, now {got}"
+            )
+    for (explorer, group), (was, now, n) in sorted(groups.items()):
+        print(f"{explorer:8s} {group:8s} right {was}/{n} when explored, {now}/{n} now")
+    print(f"{len(changed)} answer(s) changed" + (":" if changed else ""))
+    for line in sorted(changed):
+        print(line)
+    print(f"{len(done)} records classified again in {time.perf_counter() - t0:.1f} s")
+
+
 def main(argv: list[str] | None = None) -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--instances", type=int, default=1, help="random objects per family")
@@ -294,9 +367,23 @@ def main(argv: list[str] | None = None) -> None:
         help="run the shuffled jobs from the last one back (a second process that meets a "
         "first one half-way; --summarize the two logs concatenated)",
     )
+    ap.add_argument(
+        "--records",
+        type=Path,
+        help="also save every exploration record in this directory (with an index.csv)",
+    )
+    ap.add_argument(
+        "--rejudge",
+        type=Path,
+        help="classify the records saved with --records in this directory again, print "
+        "what changed, and stop",
+    )
     args = ap.parse_args(argv if argv is not None else [])
     if args.summarize:
         summary(read_log(args.summarize))
+        return
+    if args.rejudge:
+        rejudge(args.rejudge, args.workers)
         return
     known = available_explorers()
     explorers = args.explorer or [e for e in ("stepper", "mujoco") if e in known]
@@ -315,6 +402,13 @@ def main(argv: list[str] | None = None) -> None:
     todo = [todo[int(k)] for k in order]
     if args.reverse:
         todo.reverse()
+    index_file = index = None
+    if args.records:
+        args.records.mkdir(parents=True, exist_ok=True)
+        todo = [dataclasses.replace(j, records=args.records) for j in todo]
+        index_file = (args.records / INDEX).open("w", newline="")
+        index = csv.DictWriter(index_file, FIELDS)
+        index.writeheader()
     t0 = time.perf_counter()
     results: list[Outcome] = []
     log = args.log.open("w", newline="") if args.log else None
@@ -327,6 +421,9 @@ def main(argv: list[str] | None = None) -> None:
         if log and writer:
             writer.writerow({f: getattr(o, f) for f in FIELDS})
             log.flush()
+        if index_file and index:
+            index.writerow({f: getattr(o, f) for f in FIELDS})
+            index_file.flush()
         print(
             f"[{len(results)}/{len(todo)}] {o.seconds:6.2f} s  {o.explorer} {o.group} {o.rules} "
             f"noise {o.noise:g} {o.name}: {o.got[:60]}",
@@ -345,6 +442,8 @@ def main(argv: list[str] | None = None) -> None:
     finally:
         if log:
             log.close()
+        if index_file:
+            index_file.close()
     summary(results)
     print(f"{len(results)} classifications in {time.perf_counter() - t0:.1f} s")
 
