@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import csv
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pytest
@@ -13,6 +14,7 @@ import trimesh
 from tactile_kb import solids
 from tactile_kb.errors import UsageError
 from tactile_kb.features.builtin import get_feature
+from tactile_kb.geometry import planes
 from tactile_kb.geometry.model import build_model
 from tactile_kb.objects import load_object
 from tactile_kb.perturb import (
@@ -214,11 +216,29 @@ def test_level_two_scans_keep_their_class_under_noise(mesh: trimesh.Trimesh, lab
     assert result.decision.label == label
 
 
-def test_a_poor_scans_flat_patches_are_no_ideal_surface() -> None:
+def test_a_poor_scans_flat_patches_are_no_ideal_surface(monkeypatch: pytest.MonkeyPatch) -> None:
     # an 11 cm triangular prism scanned at level 3, exact contacts: a contour over a patch
     # that is exactly flat between bumps is as straight as an ideal face's, and the tests
     # meant for an ideal surface's exact touches (strays off a straight line) took touches
-    # of its faces away; its faces' scatter (tenths of a millimetre) says it is a scan
+    # of its faces away; its faces' scatter (tenths of a millimetre) says it is a scan, at
+    # every model the exploration builds, while the ideal prism's exact touches are an ideal
+    # surface's. (The scan's answer rests on the way its completion goes: prism when this
+    # test was written; since the rounded-edge sink of planes.edge_faces it goes another way
+    # and ends "other polyhedron", a corner touch 11 mm inside the sharp corner kept as a
+    # face; the figures of docs/benchmarks.md count it.)
+    judged: list[bool] = []
+    ideal = planes._ideal
+
+    def spy(*args: Any, **kwargs: Any) -> bool:
+        judged.append(ideal(*args, **kwargs))
+        return judged[-1]
+
+    monkeypatch.setattr(planes, "_ideal", spy)
     mesh = solids.rotate_about_z(solids.prism(3, 0.1086, 0.0909), 109.0)
-    result = classify(perturb(mesh, 3, seed=0), rules="polyhedra", explorer="stepper", seed=0)
+    classify(perturb(mesh, 3, seed=0), rules="polyhedra", explorer="stepper", seed=0)
+    assert judged
+    assert not any(judged)
+    judged.clear()
+    result = classify(mesh, rules="polyhedra", explorer="stepper", seed=0)
+    assert any(judged)
     assert result.decision.label == "prism"
