@@ -313,7 +313,15 @@ def rejudge(folder: Path, workers: int) -> None:
     if not index.is_file():
         raise SystemExit(f"{index}: no such file (save records with --records {folder})")
     with index.open(newline="") as f:
-        rows = [r for r in csv.DictReader(f) if not r["got"].startswith("error")]
+        reader = csv.DictReader(f)
+        missing = [
+            k
+            for k in ("explorer", "group", "name", "rules", "noise", "label", "got")
+            if k not in (reader.fieldnames or ())
+        ]
+        if missing:
+            raise SystemExit(f"{index}:1: not an index of --records (no column {missing[0]!r})")
+        rows = [r for r in reader if not r["got"].startswith("error")]
     t0 = time.perf_counter()
     if workers > 1:
         with multiprocessing.get_context("fork").Pool(workers) as pool:

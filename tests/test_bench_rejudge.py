@@ -2,7 +2,8 @@
 
 A saved exploration record holds everything the decision needs: classified again with the
 same code, every answer is the one given when it was explored. An answer the index says was
-different shows as changed, and a directory without an index is refused in one line.
+different shows as changed, and a directory without an index, or with a file that is none, is
+refused in one line.
 """
 
 from __future__ import annotations
@@ -76,4 +77,13 @@ def test_a_folder_without_an_index_is_refused_in_one_line(tmp_path: Path) -> Non
         bench_real.main(["--rejudge", str(tmp_path)])
     assert str(err.value) == (
         f"{tmp_path / 'index.csv'}: no such file (save records with --records {tmp_path})"
+    )
+
+
+def test_a_file_that_is_no_index_is_refused_in_one_line(tmp_path: Path) -> None:
+    (tmp_path / bench_real.INDEX).write_text("explorer,group,name\nstepper,ideal,cube\n")
+    with pytest.raises(SystemExit) as err:
+        bench_real.main(["--rejudge", str(tmp_path)])
+    assert str(err.value) == (
+        f"{tmp_path / 'index.csv'}:1: not an index of --records (no column 'rules')"
     )
