@@ -67,6 +67,7 @@ from scipy.optimize import nnls
 from scipy.special import gammaincinv
 
 from tactile_kb.errors import GeometryError, UsageError
+from tactile_kb.geometry.memo import Memo
 from tactile_kb.geometry.polyhedron import Polyhedron, face_width, polyhedron_from_planes
 from tactile_kb.record import Contact, ExplorationRecord
 from tactile_kb.settings import DEFAULTS, current
@@ -236,9 +237,47 @@ class _Fit:
         return float(np.abs(self.residuals).max()) if len(self.residuals) else 0.0
 
 
+_FITS_SIZE = 8192
+"""Fits kept by their exact inputs (:class:`~tactile_kb.geometry.memo.Memo`): the model is built
+again after every completion probe, and most of its groups of contacts are those of the last
+build."""
+
+_FITS: Memo[tuple[bytes, bytes, float, float, float, float, float, float], _Fit] = Memo(_FITS_SIZE)
+
+
 def _fit(
     centres: FloatArray, sensor_normals: FloatArray, span_min: float, scale: float = 0.0
 ) -> _Fit:
+    """The plane of the tip ``centres`` (k, 3) touched with sensor normals ``sensor_normals``
+    (k, 3) (see :func:`fit_face`; robust, least scale ``scale``, when that is positive).
+
+    The same inputs, under the same tolerances, give the same (read-only) fit, made once."""
+    c = np.ascontiguousarray(centres, dtype=float)
+    n = np.ascontiguousarray(sensor_normals, dtype=float)
+    key = (
+        c.tobytes(),
+        n.tobytes(),
+        float(span_min),
+        float(scale),
+        current().geometry.max_refine_deg,
+        INSIDE_SIGMAS,
+        OUTSIDE_SIGMAS,
+        MAX_REJECTED,
+    )
+    return _FITS.get(key, lambda: _frozen_fit(_fit_anew(c, n, span_min, scale)))
+
+
+def _frozen_fit(f: _Fit) -> _Fit:
+    """``f`` with its arrays read-only: a kept fit is shared by its callers."""
+    f.normal.flags.writeable = False
+    f.residuals.flags.writeable = False
+    return f
+
+
+def _fit_anew(
+    centres: FloatArray, sensor_normals: FloatArray, span_min: float, scale: float = 0.0
+) -> _Fit:
+    """:func:`_fit`, computed."""
     mean_n = sensor_normals.mean(axis=0)
     mean_n /= math.sqrt(float(mean_n @ mean_n))
     mean_c = centres.mean(axis=0)

@@ -30,11 +30,8 @@ from __future__ import annotations
 import functools
 import itertools
 import math
-import threading
-from collections import OrderedDict
 from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import TypeVar
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -44,6 +41,7 @@ from scipy.sparse.csgraph import connected_components
 from scipy.spatial import ConvexHull, HalfspaceIntersection, QhullError
 
 from tactile_kb.errors import GeometryError, OpenModelError, UsageError
+from tactile_kb.geometry.memo import Memo
 from tactile_kb.settings import DEFAULTS, current
 from tactile_kb.types import FloatArray
 
@@ -268,15 +266,15 @@ def _chebyshev(n: FloatArray, d: FloatArray) -> tuple[FloatArray, float]:
         except GeometryError as exc:
             return _maker(exc)
 
-    hit = _recall(_CENTRES, (n.tobytes(), d.tobytes()), solve)
+    hit = _CENTRES.get((n.tobytes(), d.tobytes()), solve)
     if callable(hit):
         raise hit()
     return hit[0].copy(), hit[1]
 
 
-_CENTRES: OrderedDict[
-    tuple[bytes, bytes], tuple[FloatArray, float] | Callable[[], GeometryError]
-] = OrderedDict()
+_CENTRES: Memo[tuple[bytes, bytes], tuple[FloatArray, float] | Callable[[], GeometryError]] = Memo(
+    1024
+)
 
 
 def _chebyshev_lp(n: FloatArray, d: FloatArray) -> tuple[FloatArray, float]:
@@ -472,7 +470,7 @@ def polyhedron_from_planes(
         float(merge_fraction),
     )
     mf = float(merge_fraction)
-    built = _recall(_BUILT, key, lambda: _build(n, d, tol, mf, hint))
+    built = _BUILT.get(key, lambda: _build(n, d, tol, mf, hint))
     if built.early is not None:
         raise built.early()
     if bound is not None:
@@ -508,28 +506,7 @@ _BUILT_SIZE = 1024
 after every completion probe from mostly the same faces, and the edge and explained-face
 tests build the polyhedron of every subset of them again."""
 
-_BUILT: OrderedDict[tuple[bytes, bytes, bytes | None, float | None, float], _Built] = OrderedDict()
-
-
-_K = TypeVar("_K")
-_V = TypeVar("_V")
-_LOCK = threading.Lock()
-
-
-def _recall(cache: OrderedDict[_K, _V], key: _K, make: Callable[[], _V]) -> _V:
-    """``cache[key]``, made by ``make()`` when missing; at most :data:`_BUILT_SIZE` entries,
-    the least recently used dropped first (a lock guards the dictionary: a batch may run a
-    timed-out task's thread beside the next one)."""
-    with _LOCK:
-        if key in cache:
-            cache.move_to_end(key)
-            return cache[key]
-    value = make()
-    with _LOCK:
-        cache[key] = value
-        while len(cache) > _BUILT_SIZE:
-            cache.popitem(last=False)
-    return value
+_BUILT: Memo[tuple[bytes, bytes, bytes | None, float | None, float], _Built] = Memo(_BUILT_SIZE)
 
 
 def _maker(exc: GeometryError) -> Callable[[], GeometryError]:
