@@ -129,3 +129,20 @@ def test_a_changed_setting_is_not_answered_from_the_memo() -> None:
         narrow = planes._fit(centres, normals, 0.001)
     assert not narrow.refined  # the fresh answer, not the kept one
     assert planes._fit(centres, normals, 0.001) is wide
+
+
+def test_a_large_group_is_fitted_afresh_with_the_same_answer() -> None:
+    rng = np.random.default_rng(3)
+    rows = planes._FITS_ROWS + 1
+    centres = rng.normal(scale=0.02, size=(rows, 3)) * np.array([1.0, 1.0, 0.01])
+    normals = np.tile([0.0, 0.0, 1.0], (rows, 1))
+    planes._FITS.clear()
+    a = planes._fit(centres, normals, 0.001)
+    b = planes._fit(centres, normals, 0.001)
+    assert len(planes._FITS) == 0  # not kept
+    assert b is not a
+    assert a.normal.tobytes() == b.normal.tobytes()
+    assert a.residuals.tobytes() == b.residuals.tobytes()
+    assert a.centre_offset == b.centre_offset
+    fresh = planes._fit_anew(centres, normals, 0.001)
+    assert fresh.normal.tobytes() == a.normal.tobytes()

@@ -242,6 +242,10 @@ _FITS_SIZE = 8192
 again after every completion probe, and most of its groups of contacts are those of the last
 build."""
 
+_FITS_ROWS = 256
+"""The largest group of contacts whose fit is kept (its key holds the group's bytes: at most
+12 KiB, so the memo stays under about 100 MiB)."""
+
 _FITS: Memo[tuple[bytes, bytes, float, float, float, float, float, float], _Fit] = Memo(_FITS_SIZE)
 
 
@@ -251,9 +255,13 @@ def _fit(
     """The plane of the tip ``centres`` (k, 3) touched with sensor normals ``sensor_normals``
     (k, 3) (see :func:`fit_face`; robust, least scale ``scale``, when that is positive).
 
-    The same inputs, under the same tolerances, give the same (read-only) fit, made once."""
+    The same inputs, under the same tolerances, give the same (read-only) fit, made once
+    (groups of more than :data:`_FITS_ROWS` contacts are fitted afresh each time, which
+    bounds the memo's memory)."""
     c = np.ascontiguousarray(centres, dtype=float)
     n = np.ascontiguousarray(sensor_normals, dtype=float)
+    if len(c) > _FITS_ROWS:
+        return _frozen_fit(_fit_anew(c, n, span_min, scale))
     key = (
         c.tobytes(),
         n.tobytes(),
