@@ -533,7 +533,7 @@ class FeatureSettings(_Group):
         gt=0,
         lt=1,
         description="Fraction: lengths this close relative to each other are equal (equal edges, "
-        "congruent faces).",
+        "congruent faces), and an edge no longer than this of the mean edge is a split corner.",
     )
     edge_sigmas: float = Field(
         4.0,

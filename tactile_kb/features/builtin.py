@@ -1464,12 +1464,15 @@ def equal_edges(
 
 def _split_corners(model: ObjectModel, sigmas: float) -> NDArray[np.bool_]:
     """(E,) whether each polyhedron edge is a split corner: no longer than ``sigmas`` times its
-    length's uncertainty (:func:`edge_uncertainties`), so indistinguishable from none. Where
-    more than three faces meet, noisy planes meet in no one point and leave such an edge.
-    Exact planes split nothing."""
+    length's uncertainty (:func:`edge_uncertainties`), or than ``features.rel_tol`` of the
+    mean edge (the tolerance within which lengths count equal), so indistinguishable from
+    none. Where more than three faces meet, noisy planes meet in no one point and leave such
+    an edge; so do exact touches of a rough scan, whose fits report no uncertainty while a
+    bump or a rounded edge tilts a plane by a degree or two."""
     p = _poly(model, "edge_uncertainties")
     lengths = _derived(model, (__name__, current().features, "edge_lengths"), p.edge_lengths)
-    return np.asarray(lengths <= sigmas * _edge_sigmas(model), dtype=bool)
+    least = current().features.rel_tol * float(lengths.mean()) if len(lengths) else 0.0
+    return np.asarray(lengths <= np.maximum(sigmas * _edge_sigmas(model), least), dtype=bool)
 
 
 def _face_cycles(model: ObjectModel, sigmas: float) -> tuple[list[list[int]], FloatArray]:
