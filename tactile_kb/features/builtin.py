@@ -1424,9 +1424,9 @@ def equal_edges(
     whose plane a rough surface tilts by a degree or two lengthens the edges on one side of it
     and shortens those opposite by as much (a 95 mm cube's lateral edges 91.8–97.6 mm under
     a top tilted by 1.7°): their mean keeps the length.
-    An edge no longer than ``sigmas`` σ is a corner that noisy planes split (four faces of an
-    octahedron meet at each corner, and four noisy planes meet in no one point), not an edge
-    (:func:`_split_corners`).
+    An edge no longer than ``sigmas`` σ, or than ``rel_tol`` of the mean edge, is a corner
+    that noisy planes split (four faces of an octahedron meet at each corner, and four noisy
+    planes meet in no one point), not an edge (:func:`_split_corners`).
 
     False on a model closed by an assumed top (``model.assumed_top``): the lateral edges'
     true length is unknown."""
@@ -1438,7 +1438,7 @@ def equal_edges(
         return False
     lengths = _derived(model, (__name__, current().features, "edge_lengths"), p.edge_lengths)
     sig = _edge_sigmas(model)
-    kept = ~_split_corners(model, sigmas)
+    kept = ~_split_corners(model, sigmas, rel_tol)
     lengths, sig = lengths[kept], sig[kept]
     if not len(lengths):
         return False
@@ -1462,24 +1462,26 @@ def equal_edges(
     return bool((diff <= allowed).all())
 
 
-def _split_corners(model: ObjectModel, sigmas: float) -> NDArray[np.bool_]:
+def _split_corners(model: ObjectModel, sigmas: float, rel_tol: float) -> NDArray[np.bool_]:
     """(E,) whether each polyhedron edge is a split corner: no longer than ``sigmas`` times its
-    length's uncertainty (:func:`edge_uncertainties`), or than ``features.rel_tol`` of the
-    mean edge (the tolerance within which lengths count equal), so indistinguishable from
+    length's uncertainty (:func:`edge_uncertainties`), or than ``rel_tol`` of the mean edge
+    (the tolerance within which lengths count equal), so indistinguishable from
     none. Where more than three faces meet, noisy planes meet in no one point and leave such
     an edge; so do exact touches of a rough scan, whose fits report no uncertainty while a
     bump or a rounded edge tilts a plane by a degree or two."""
     p = _poly(model, "edge_uncertainties")
     lengths = _derived(model, (__name__, current().features, "edge_lengths"), p.edge_lengths)
-    least = current().features.rel_tol * float(lengths.mean()) if len(lengths) else 0.0
+    least = rel_tol * float(lengths.mean()) if len(lengths) else 0.0
     return np.asarray(lengths <= np.maximum(sigmas * _edge_sigmas(model), least), dtype=bool)
 
 
-def _face_cycles(model: ObjectModel, sigmas: float) -> tuple[list[list[int]], FloatArray]:
+def _face_cycles(
+    model: ObjectModel, sigmas: float, rel_tol: float
+) -> tuple[list[list[int]], FloatArray]:
     """Each polyhedron face's corners in order, and the corners' positions: the two ends of
     a split corner (:func:`_split_corners`) are one corner, at their middle."""
     p = _poly(model, "congruent_faces")
-    split = _split_corners(model, sigmas)
+    split = _split_corners(model, sigmas, rel_tol)
     group = list(range(len(p.vertices)))
 
     def root(v: int) -> int:
@@ -1505,7 +1507,7 @@ def _face_cycles(model: ObjectModel, sigmas: float) -> tuple[list[list[int]], Fl
 
 
 def _congruence(
-    model: ObjectModel, sigmas: float
+    model: ObjectModel, sigmas: float, rel_tol: float
 ) -> tuple[bool, FloatArray, FloatArray, FloatArray, FloatArray, float]:
     """How far the faces are from congruent with the first: ``(same number of sides,
     differences of the sorted side lengths (F − 1, sides), their uncertainty (F − 1,),
@@ -1517,7 +1519,7 @@ def _congruence(
     uncertainty (each side's direction by s over its length); a face's angles by the most
     uncertain of its corners."""
     p = _poly(model, "congruent_faces")
-    cycles, corners = _face_cycles(model, sigmas)
+    cycles, corners = _face_cycles(model, sigmas, rel_tol)
     counts = np.asarray([len(f) for f in cycles], dtype=np.intp)
     none = np.zeros((0, 0)), np.zeros(0), np.zeros(0), np.zeros(0)
     if (counts != counts[0]).any() or counts[0] < 3:
@@ -1569,8 +1571,8 @@ def congruent_faces(
         return False
     same, diffs, pair, dangles, angle_pair, scale = _derived(
         model,
-        (__name__, current().features, "congruence"),
-        lambda: _congruence(model, sigmas),
+        (__name__, current().features, "congruence", rel_tol),
+        lambda: _congruence(model, sigmas, rel_tol),
     )
     allowed = np.maximum(rel_tol * scale, sigmas * pair)[:, None]
     return (
