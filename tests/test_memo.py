@@ -70,15 +70,18 @@ def test_memo_stays_bounded_and_consistent_under_threads() -> None:
     assert len(memo) <= 16
 
 
-def _records() -> list[object]:
+def _record(index: int) -> object:
+    """One of four records: sampled from a box, a prism and a frustum, and touched on a
+    level-2 scan of an octahedron."""
     finger = builtin_finger("33")
+    if index == 0:
+        return sample_record(solids.box(0.1, 0.06, 0.04), finger, noise=0.0005, seed=3)
+    if index == 1:
+        return sample_record(solids.prism(7, 0.05, 0.1), finger, noise=0.0005, seed=4)
+    if index == 2:
+        return sample_record(solids.frustum(5, 0.06, 0.03, 0.04), finger, noise=0.0, seed=5)
     octahedron = solids.octahedron(0.08)
-    return [
-        sample_record(solids.box(0.1, 0.06, 0.04), finger, noise=0.0005, seed=3),
-        sample_record(solids.prism(7, 0.05, 0.1), finger, noise=0.0005, seed=4),
-        sample_record(solids.frustum(5, 0.06, 0.03, 0.04), finger, noise=0.0, seed=5),
-        touch_record(perturb(octahedron, 2, seed=6), octahedron, finger, noise=0.0005, seed=6),
-    ]
+    return touch_record(perturb(octahedron, 2, seed=6), octahedron, finger, noise=0.0005, seed=6)
 
 
 def _faces(record: object) -> list[tuple[bytes, float, tuple[int, ...], bool]]:
@@ -88,7 +91,7 @@ def _faces(record: object) -> list[tuple[bytes, float, tuple[int, ...], bool]]:
 
 @pytest.mark.parametrize("index", range(4))
 def test_a_model_from_kept_fits_equals_one_from_fresh_fits(index: int) -> None:
-    record = _records()[index]
+    record = _record(index)
     planes._FITS.clear()
     fresh = _faces(record)
     assert len(planes._FITS) > 0

@@ -272,8 +272,13 @@ def _chebyshev(n: FloatArray, d: FloatArray) -> tuple[FloatArray, float]:
     return hit[0].copy(), hit[1]
 
 
+_BUILT_SIZE = 1024
+"""Plane sets whose polyhedra, and Chebyshev centres, are kept (least recently used first
+out): a model is rebuilt after every completion probe from mostly the same faces, and the
+edge and explained-face tests build the polyhedron of every subset of them again."""
+
 _CENTRES: Memo[tuple[bytes, bytes], tuple[FloatArray, float] | Callable[[], GeometryError]] = Memo(
-    1024
+    _BUILT_SIZE
 )
 
 
@@ -500,11 +505,6 @@ class _Built:
     poly: Polyhedron | None
     late: Callable[[], GeometryError] | None
 
-
-_BUILT_SIZE = 1024
-"""Plane sets whose polyhedra are kept (least recently used first out): a model is rebuilt
-after every completion probe from mostly the same faces, and the edge and explained-face
-tests build the polyhedron of every subset of them again."""
 
 _BUILT: Memo[tuple[bytes, bytes, bytes | None, float | None, float], _Built] = Memo(_BUILT_SIZE)
 
