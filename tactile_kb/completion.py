@@ -60,7 +60,9 @@ from tactile_kb.geometry.planes import (
     SMOOTH_RHO,
     Face,
     nearest_points,
+    rounded_edge_slack,
     rounding_zone,
+    segment_distances,
     surface_detail,
 )
 from tactile_kb.geometry.polyhedron import Polyhedron
@@ -247,6 +249,7 @@ def completion_probes(model: ObjectModel, *, height_gap: float | None = None) ->
     # level-1 to level-3 scans: 0.38–0.60 mm)
     scan = record.noise <= 0 and surface_detail(model.faces) > SMOOTH_RHO * rho
     again: list[Probe] = []
+    _, beside = rounded_edge_slack(poly, current().geometry.edge_rounding)
     for k, verts, face, n in _modelled_faces(model):
         if face.source == "contacts" and n[2] >= current().explore.top_nz:
             probes += _top_probes(face, poly.vertices[list(verts)], centres, rho)
@@ -270,12 +273,19 @@ def completion_probes(model: ObjectModel, *, height_gap: float | None = None) ->
         if z1 - z0 < 2.0 * rho:
             continue  # lower than the tip is wide: one height is all it can give
         margin = min(rho, 0.25 * (z1 - z0))
-        # the surface heights the tip can touch on this face, clear of its edges (the tip
-        # centre stays 1.5 ρ above the table: scanned bottom edges bulge)
-        lo_z = max(z0 + margin, 1.5 * rho - rho * n[2])
+        # (half ρ more, and the tip centre's rise off a sloping face: clear of the rounding
+        # zone, whose faces' widths move as the model grows, not on its border)
+        below, above = (
+            r + (0.5 + abs(float(n[2]))) * rho if r > 0 else 0.0
+            for r in _rounding_reach(poly, k, beside)
+        )
+        # the surface heights the tip can touch on this face, clear of its edges and of
+        # their roundings (the tip centre stays 1.5 ρ above the table: scanned bottom edges
+        # bulge)
+        lo_z = max(z0 + max(margin, below), 1.5 * rho - rho * n[2])
         # no higher than the highest point touched: a side's outline above it comes from a
         # top not known yet (one touched along a line only tilts with its ridge)
-        hi_z = min(z1 - margin, top_touched)
+        hi_z = min(z1 - max(margin, above), top_touched)
         if hi_z <= lo_z:
             continue
         have = float(zs.mean()) - rho * n[2] if len(zs) else 0.5 * (lo_z + hi_z)
@@ -319,6 +329,32 @@ def completion_probes(model: ObjectModel, *, height_gap: float | None = None) ->
     probes += again
     probes += second_spot_probes(model)
     return probes
+
+
+def _rounding_reach(poly: Polyhedron, face: int, beside: FloatArray) -> tuple[float, float]:
+    """How far up from its lowest point and down from its highest (z, metres) face ``face``
+    of ``poly`` may be rounded: the largest reach (``beside``, per edge:
+    :func:`~tactile_kb.geometry.planes.rounded_edge_slack`) of its edges in its lower and
+    its upper half, each times the slope across the edge in the face's plane."""
+    ring = poly.vertices[list(poly.faces[face])]
+    middle = 0.5 * (float(ring[:, 2].min()) + float(ring[:, 2].max()))
+    n = poly.normals[face]
+    below = above = 0.0
+    for e, pair in enumerate(poly.edge_faces):
+        if face not in pair:
+            continue
+        a, b = poly.vertices[list(poly.edges[e])]
+        d = b - a
+        length = float(np.linalg.norm(d))
+        if length < 1e-12:
+            continue
+        across = abs(float(np.cross(n, d / length)[2]))  # the face's slope across the edge
+        reach = float(beside[e]) * across
+        if 0.5 * (float(a[2]) + float(b[2])) >= middle:
+            above = max(above, reach)
+        else:
+            below = max(below, reach)
+    return below, above
 
 
 FAR_FACE_NZ = -0.5
@@ -572,6 +608,15 @@ def _free_path_probes(model: ObjectModel, rho: float, *, most: int = 4) -> list[
     gap = x[near] - q
     dist = np.linalg.norm(gap, axis=1)
     deep = dist < rho - tol
+    if deep.any() and len(poly.edges):
+        # a path round a rounded edge passes nearer its sharp edge by up to the rounding's
+        # slack, where its nearest point lies on the rounding (beside the edge)
+        inside, beside = rounded_edge_slack(poly, current().geometry.edge_rounding)
+        ends = np.asarray(poly.edges, dtype=np.intp).reshape(-1, 2)
+        which = np.flatnonzero(deep)
+        on = segment_distances(q[which], poly.vertices[ends[:, 0]], poly.vertices[ends[:, 1]])
+        slack = np.where(on <= beside[None, :], inside[None, :], 0.0).max(axis=1)
+        deep[which] = dist[which] < rho - tol - slack
     if not deep.any():
         return []
     pts, qs, ds = x[near][deep], q[deep], dist[deep]
@@ -782,17 +827,16 @@ def _beyond_unexplained_edges(model: ObjectModel) -> set[int]:
     verts = np.asarray(poly.vertices, dtype=float)
     ends = np.asarray(poly.edges, dtype=int).reshape(-1, 2)
     a, b = verts[ends[:, 0]], verts[ends[:, 1]]
-    ab = b - a
-    length2 = np.maximum((ab * ab).sum(axis=1), 1e-18)
+    # a touch on a rounded edge lies up to the rounding's reach beside the sharp edge
+    _, beside = rounded_edge_slack(poly, current().geometry.edge_rounding)
     out: set[int] = set()
     for i in edge:
         if not isinstance(i, int) or not 0 <= i < len(record.contacts):
             continue
         c = record.contacts[i]
         p = np.asarray(c.point, dtype=float)
-        t = np.clip(((p - a) * ab).sum(axis=1) / length2, 0.0, 1.0)
-        if float(np.linalg.norm(a + t[:, None] * ab - p, axis=1).min()) <= tol:
-            continue  # an edge of the model: explained
+        if float((segment_distances(p[None, :], a, b)[0] - beside).min()) <= tol:
+            continue  # an edge of the model (rounded or not): explained
         outward = -np.asarray(c.direction, dtype=float)
         for k, ring in enumerate(poly.faces):
             n = poly.normals[k]

@@ -342,8 +342,9 @@ def test_a_scans_second_height_on_a_rounded_edge_is_tested_half_way() -> None:
     # The side's other touches: a probe's on its top edge's rounding (r = 6 mm, the tip 30°
     # up from the side), 1.5 mm inside the side's plane. On a scan touched without noise
     # (faces scattering by 0.3 mm) they join the side and tilt it about its line: the side
-    # is tested half way from the line (z = 3 cm) to an end of the face (5.5 cm under the
-    # top edge, or 0.75 cm over the table), where it is flat.
+    # is tested half way from the line (z = 3 cm) to an end of the face, where it is flat:
+    # the ends lie clear of its top and bottom edges' largest roundings (0.1 × the side's
+    # 6 cm width, the narrower face at both edges) and half ρ more, 5.15 cm and 0.85 cm.
     rho, r, phi = RHO, 0.006, math.radians(30.0)
     d = np.array([math.cos(phi), 0.0, -math.sin(phi)])
     axis = np.array([-0.05 + r, 0.0, 0.06 - r])
@@ -361,8 +362,9 @@ def test_a_scans_second_height_on_a_rounded_edge_is_tested_half_way() -> None:
         if p.reason.startswith("a second height on a rounded edge")
     ]
     heights = sorted(p.target[2] for p in asked)
+    clear = 0.1 * 0.06 + 0.5 * rho
     assert np.allclose(
-        heights, [0.03 - 0.5 * (0.03 - 0.0075), 0.03 + 0.5 * (0.055 - 0.03)], atol=0.001
+        heights, [0.03 - 0.5 * (0.03 - clear), 0.03 + 0.5 * (0.06 - clear - 0.03)], atol=0.001
     )
     assert all(p.normal[0] < -0.99 for p in asked)
     # the same touch on the flat side, 1.5 cm over the line: a second height, nothing asked

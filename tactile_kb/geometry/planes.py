@@ -106,7 +106,9 @@ __all__ = [
     "merge_planes",
     "nearest_points",
     "refit_past_roundings",
+    "rounded_edge_slack",
     "rounding_zone",
+    "segment_distances",
     "surface_detail",
 ]
 
@@ -2379,6 +2381,42 @@ def rounding_zone(
     need = (rho * cos_b[others] - over) / (1.0 - cos_b[others])
     cap = rounding * np.minimum(widths, face_width(poly, face))
     return np.asarray((need <= cap).any(axis=1))
+
+
+def rounded_edge_slack(poly: Polyhedron, rounding: float) -> tuple[FloatArray, FloatArray]:
+    """How a rounded edge moves the touch away from each edge of ``poly``: ``(inside,
+    beside)``, (E,) metres each, for an edge rounded with the largest radius allowed, ``r``
+    = ``rounding`` × the narrower of its two faces' widths, its faces' normals θ apart.
+
+    * ``inside = r (1/cos(θ/2) − 1)``: how much nearer than ρ to the model's sharp edge a
+      tip centre passes that goes round the rounding (its arc, ρ + r from the rounding's
+      axis, against the edge's r / cos(θ/2)): 0.41 r at a right angle.
+    * ``beside = r tan(θ/2)``: how far from the sharp edge a touch on the rounding may lie
+      (where the rounding meets its faces): r at a right angle.
+
+    Both are 0 at an edge whose faces meet at less than 60° (``ACUTE_COS``, as in
+    :func:`edge_faces`: a spike's wide faces would explain a small face cutting it off)."""
+    n_edges = len(poly.edges)
+    if n_edges == 0 or rounding <= 0:
+        return np.zeros(n_edges), np.zeros(n_edges)
+    pairs = np.asarray(poly.edge_faces, dtype=np.intp).reshape(-1, 2)
+    widths = np.asarray([face_width(poly, f) for f in range(len(poly.faces))], dtype=float)
+    r = rounding * np.minimum(widths[pairs[:, 0]], widths[pairs[:, 1]])
+    cos = np.clip((poly.normals[pairs[:, 0]] * poly.normals[pairs[:, 1]]).sum(axis=1), -1, 1)
+    half = np.sqrt((1.0 + cos) / 2.0)  # cos(θ/2)
+    ok = cos >= ACUTE_COS
+    inside = np.where(ok, r * (1.0 / np.maximum(half, 1e-9) - 1.0), 0.0)
+    beside = np.where(ok, r * np.sqrt(np.maximum(1.0 - half**2, 0.0)) / np.maximum(half, 1e-9), 0.0)
+    return inside, beside
+
+
+def segment_distances(points: FloatArray, a: FloatArray, b: FloatArray) -> FloatArray:
+    """(P, E) distance of each of ``points`` from each segment ``a[e]``–``b[e]``."""
+    ab = b - a
+    length2 = np.maximum((ab * ab).sum(axis=1), 1e-18)
+    t = np.clip(((points[:, None, :] - a[None]) * ab[None]).sum(axis=2) / length2, 0.0, 1.0)
+    foot = a[None] + t[:, :, None] * ab[None]
+    return np.asarray(np.linalg.norm(points[:, None, :] - foot, axis=2), dtype=float)
 
 
 def _past_rounding(
