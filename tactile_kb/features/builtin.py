@@ -223,6 +223,11 @@ def _uncertainty(model: ObjectModel) -> FloatArray:
             m = f.n_contacts
             if f.refined and m > 3 and detail > 0.0:
                 own = max(f.residual * math.sqrt(m / (m - 3)), least)  # σ of the fit, m − 3 dof
+                if m <= 4:
+                    # four centres fit a plane nearly exactly: the model computed the face's
+                    # uncertainty from the scatter its other faces show (the offset's
+                    # uncertainty is that σ / √m), so that is the scatter to pool
+                    own = max(own, f.offset_uncertainty * math.sqrt(m))
                 pooled = _pooled_scatter(own, m - 3, detail)
                 if pooled > own:
                     unc = math.degrees(math.atan(math.tan(math.radians(unc)) * pooled / own))
