@@ -250,6 +250,7 @@ def completion_probes(model: ObjectModel, *, height_gap: float | None = None) ->
     scan = record.noise <= 0 and surface_detail(model.faces) > SMOOTH_RHO * rho
     again: list[Probe] = []
     _, beside = rounded_edge_slack(poly, current().geometry.edge_rounding)
+    reach_below, reach_above = _rounding_reach(poly, beside)
     for k, verts, face, n in _modelled_faces(model):
         if face.source == "contacts" and n[2] >= current().explore.top_nz:
             probes += _top_probes(face, poly.vertices[list(verts)], centres, rho)
@@ -277,7 +278,7 @@ def completion_probes(model: ObjectModel, *, height_gap: float | None = None) ->
         # zone, whose faces' widths move as the model grows, not on its border)
         below, above = (
             r + (0.5 + abs(float(n[2]))) * rho if r > 0 else 0.0
-            for r in _rounding_reach(poly, k, beside)
+            for r in (float(reach_below[k]), float(reach_above[k]))
         )
         # the surface heights the tip can touch on this face, clear of its edges and of
         # their roundings (the tip centre stays 1.5 ρ above the table: scanned bottom edges
@@ -331,29 +332,31 @@ def completion_probes(model: ObjectModel, *, height_gap: float | None = None) ->
     return probes
 
 
-def _rounding_reach(poly: Polyhedron, face: int, beside: FloatArray) -> tuple[float, float]:
-    """How far up from its lowest point and down from its highest (z, metres) face ``face``
-    of ``poly`` may be rounded: the largest reach (``beside``, per edge:
-    :func:`~tactile_kb.geometry.planes.rounded_edge_slack`) of its edges in its lower and
-    its upper half, each times the slope across the edge in the face's plane."""
-    ring = poly.vertices[list(poly.faces[face])]
-    middle = 0.5 * (float(ring[:, 2].min()) + float(ring[:, 2].max()))
-    n = poly.normals[face]
-    below = above = 0.0
-    for e, pair in enumerate(poly.edge_faces):
-        if face not in pair:
-            continue
-        a, b = poly.vertices[list(poly.edges[e])]
-        d = b - a
-        length = float(np.linalg.norm(d))
-        if length < 1e-12:
-            continue
-        across = abs(float(np.cross(n, d / length)[2]))  # the face's slope across the edge
-        reach = float(beside[e]) * across
-        if 0.5 * (float(a[2]) + float(b[2])) >= middle:
-            above = max(above, reach)
-        else:
-            below = max(below, reach)
+def _rounding_reach(poly: Polyhedron, beside: FloatArray) -> tuple[FloatArray, FloatArray]:
+    """How far up from its lowest point and down from its highest (z, metres) each face of
+    ``poly`` may be rounded: the largest reach (``beside``, per edge:
+    :func:`~tactile_kb.geometry.planes.rounded_edge_slack`) of its edges in its lower and its
+    upper half, each times the face's slope across the edge; ``(below, above)``, (F,) each."""
+    f_ = len(poly.faces)
+    below, above = np.zeros(f_), np.zeros(f_)
+    if len(poly.edges) == 0:
+        return below, above
+    ends = np.asarray(poly.edges, dtype=np.intp).reshape(-1, 2)
+    a, b = poly.vertices[ends[:, 0]], poly.vertices[ends[:, 1]]
+    d = (b - a) / np.maximum(np.linalg.norm(b - a, axis=1), 1e-12)[:, None]
+    mid_z = 0.5 * (a[:, 2] + b[:, 2])
+    face_mid = np.asarray(
+        [
+            0.5 * (float(poly.vertices[list(r), 2].min()) + float(poly.vertices[list(r), 2].max()))
+            for r in poly.faces
+        ]
+    )
+    for side in (0, 1):
+        f = np.asarray(poly.edge_faces, dtype=np.intp).reshape(-1, 2)[:, side]
+        reach = beside * np.abs(np.cross(poly.normals[f], d)[:, 2])  # the slope across
+        upper = mid_z >= face_mid[f]
+        np.maximum.at(above, f[upper], reach[upper])
+        np.maximum.at(below, f[~upper], reach[~upper])
     return below, above
 
 
