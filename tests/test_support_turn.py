@@ -103,3 +103,46 @@ def test_a_face_of_two_touches_beyond_which_a_layer_lies_stays_out() -> None:
     mesh = solids.resting(m, 3, 192.5222218492498)
     result = classify(mesh, rules="polyhedra", noise=0.0005, seed=1, finger=builtin_finger("33"))
     assert result.decision.label == "prism"
+
+
+def _bulged_top(patch_tilt_deg: float, patch_unc_deg: float) -> tuple[list[Face], np.ndarray]:
+    """A 27 cm flat top (surface z = 2 cm) touched 12 times 19–21 cm from a patch of 11 touches
+    along y = 10 cm whose plane is fitted turned by ``patch_tilt_deg`` about x (uncertain by
+    ``patch_unc_deg``), as a scan's bulge turns it."""
+    z = 0.02 + RHO
+    rest = [
+        np.array([x, y, z]) for x in (-0.10, -0.08, -0.06, -0.04) for y in (-0.09, -0.10, -0.11)
+    ]
+    patch = [np.array([x, 0.10, z]) for x in np.linspace(-0.07, 0.03, 11)]
+    top = Face((0.0, 0.0, 1.0), 0.02, 12, 0.0, 0.3, tuple(range(12)), True)
+    t = math.radians(patch_tilt_deg)
+    n = np.array([0.0, -math.sin(t), math.cos(t)])
+    bent = Face(
+        (0.0, float(n[1]), float(n[2])),
+        float(n @ patch[0]) - RHO,
+        11,
+        0.0,
+        patch_unc_deg,
+        tuple(range(12, 23)),
+        True,
+    )
+    return [top, bent], np.asarray([*rest, *patch])
+
+
+def test_a_bulged_tops_patch_turned_by_two_sigma_is_not_concave() -> None:
+    # the patch 9.3° off, uncertain by 4.6°: the rest of the top lies up to 34 mm beyond its
+    # plane, 21 cm away: more than one σ turns it by there (20 mm with the 3 mm tolerance),
+    # less than three σ (55 mm)
+    faces, c = _bulged_top(9.3, 4.6)
+    beyond = c[:12] @ faces[1].normal_array - faces[1].offset - RHO
+    assert float(beyond.max()) == pytest.approx(0.21 * math.sin(math.radians(9.3)), abs=2e-4)
+    _, _, _, supporting = _support(c, RHO, tuple(faces), 0.003, 0.0005)
+    assert supporting == [True, True]
+
+
+def test_a_patch_turned_beyond_three_sigma_is_concave() -> None:
+    # the same patch turned 9.3° but fitted to 2°: three σ turn it by 6°, and the top's
+    # touches 21 cm away lie 9 mm further beyond than that allows (25 mm)
+    faces, c = _bulged_top(9.3, 2.0)
+    _, _, _, supporting = _support(c, RHO, tuple(faces), 0.003, 0.0005)
+    assert supporting == [True, False]
