@@ -146,3 +146,18 @@ def test_a_patch_turned_beyond_three_sigma_is_concave() -> None:
     faces, c = _bulged_top(9.3, 2.0)
     _, _, _, supporting = _support(c, RHO, tuple(faces), 0.003, 0.0005)
     assert supporting == [True, False]
+
+
+def test_a_face_known_from_its_sensors_turns_by_their_cone_not_three() -> None:
+    # the side turned up 25°: the top's touches near the +x rim lie 27 mm beyond its plane,
+    # 86 mm from its line. Known from its sensors (their 12.95° cone, a bound) it may turn
+    # by 20 mm there, 23 mm with the 3 mm tolerance: concave. A fitted normal as uncertain
+    # (a σ) may turn by three of it (39°: 72 mm): not concave.
+    faces, c = _tilted_side(25.0, 12.95, refined=False)
+    beyond = c[:6] @ faces[1].normal_array - faces[1].offset - RHO
+    assert float(beyond.max()) == pytest.approx(0.0268, abs=5e-4)
+    _, _, _, supporting = _support(c, RHO, tuple(faces), 0.003, 0.0005)
+    assert supporting == [True, False]
+    faces, c = _tilted_side(25.0, 12.95, refined=True)
+    _, _, _, supporting = _support(c, RHO, tuple(faces), 0.003, 0.0005)
+    assert supporting == [True, True]

@@ -91,8 +91,9 @@ planes meeting at an octahedron's vertex split it into two joined by an edge of 
 (2–4 σ), while the shortest real edges of the test families are more than 5 σ long."""
 
 SUPPORT_SIGMAS = 3.0
-"""Under declared noise a face's plane may be turned by up to this many σ of its normal's
-uncertainty before a touched point beyond it makes it concave (:func:`_support`): a 27 cm
+"""Under declared noise a face's fitted plane may be turned by up to this many σ of its
+normal's uncertainty before a touched point beyond it makes it concave (:func:`_support`; a
+face known from its sensors alone turns by their quantisation cone, a bound): a 27 cm
 hexagonal disc's bulged scan top fitted a patch of 11 touches 9.3° off (2σ of its 4.6°), and
 at 1σ the touches 19–20 cm away on the rest of the top lay beyond it, so the disc was not
 convex."""
@@ -460,10 +461,10 @@ def _support(
     end of a face touches its edge, and the point estimated on the face's plane lies beyond
     the neighbouring face's.
 
-    Under ``noise``, a face's plane may be turned by :data:`SUPPORT_SIGMAS` × its normal's
-    1σ uncertainty (its fit's, or its sensors' when it is known from them alone) about its
-    own tip centres: one at a distance ``d`` from them lies beyond the plane by up to
-    ``d · tan(3σ)`` more (at most 45°; an
+    Under ``noise``, a face's plane may be turned by :data:`SUPPORT_SIGMAS` × its fitted
+    normal's uncertainty σ, or by its sensors' quantisation cone when it is known from them
+    alone (a bound, not a σ), about its own tip centres: one at a distance ``d`` from them
+    lies beyond the plane by up to ``d · tan(3σ)`` (or ``d · tan(cone)``) more (at most 45°; an
     undercut face of a lying frustum touched along one line, its quantised normal 5.6° off,
     put a tip 133 mm away 10 mm beyond it, and the frustum was taken for a concave object);
     not so a face of one or two touches, which is no row to turn a plane about. Exact
@@ -483,7 +484,10 @@ def _support(
                 continue  # one or two touches are no row to turn a plane about
             own = centres[list(f.contacts)]
             d = np.sqrt(((c[:, None, :] - own[None, :, :]) ** 2).sum(axis=2)).min(axis=1)
-            turn = min(SUPPORT_SIGMAS * f.normal_uncertainty_deg, 45.0)
+            # a fitted normal's uncertainty is a σ; a sensors' normal's, their quantisation
+            # cone, is a bound already (three of it would turn a plane by 39°)
+            sigmas = SUPPORT_SIGMAS if f.refined else 1.0
+            turn = min(sigmas * f.normal_uncertainty_deg, 45.0)
             allowed[:, k] += d * math.tan(math.radians(turn))
         supporting = [bool(s) for s in (beyond - allowed).max(axis=0) <= 0.0]
     else:
