@@ -32,6 +32,12 @@ exploring, and prints every answer that changed (in seconds for a whole draw). T
 final answer exactly for a change of what follows the exploration, and a first screen for a
 change of the model, which the completion also consults: the exploration itself would then
 change where its probes do, and only a full run tells.
+
+``--faces DIR`` (with the run's ``--draw``, ``--instances`` and ``--seeds``) makes the solids
+again and matches each saved model's faces to their planes: per group, how many models have
+every face right, extra faces (a split of one face, or an edge's face between two), missing or
+tilted ones (5° or more), a concave or an open model; then each wrong answer's model. It says
+why an answer is wrong before anyone opens a record.
 """
 
 from __future__ import annotations
@@ -351,6 +357,194 @@ def rejudge(folder: Path, workers: int) -> None:
     print(f"{len(done)} records classified again in {time.perf_counter() - t0:.1f} s")
 
 
+TILTED_DEG = 5.0
+"""``--faces``: a model face this far (degrees) or further from its plane of the object is
+tilted."""
+SPLIT_DEG = 8.0
+"""``--faces``: a second model face of one plane of the object within this angle of it is a
+split of that face; further, and between two of the object's planes, an edge's face."""
+
+
+def true_planes(mesh: trimesh.Trimesh) -> tuple[np.ndarray, np.ndarray]:
+    """The planes ``n · x = d`` of ``mesh`` (outward unit normals ``n``, offsets ``d``): its
+    facets (coplanar triangles) and the triangles in none."""
+    normals = [np.asarray(n, dtype=float) for n in mesh.facets_normal]
+    offsets = [
+        float(np.asarray(n) @ mesh.vertices[mesh.faces[facet[0], 0]])
+        for n, facet in zip(mesh.facets_normal, mesh.facets, strict=True)
+    ]
+    alone = np.ones(len(mesh.faces), dtype=bool)
+    for facet in mesh.facets:
+        alone[facet] = False
+    for k in np.flatnonzero(alone):
+        n = np.asarray(mesh.face_normals[k], dtype=float)
+        normals.append(n)
+        offsets.append(float(n @ mesh.vertices[mesh.faces[k, 0]]))
+    return np.asarray(normals, dtype=float).reshape(-1, 3), np.asarray(offsets, dtype=float)
+
+
+@dataclass(frozen=True)
+class FaceCheck:
+    """A model's faces against the planes of the solid it was explored on (``--faces``)."""
+
+    planes: int
+    faces: int
+    extra: int
+    split: int
+    edge: int
+    missing: int
+    tilt_deg: float
+    convex: bool
+    closed: bool
+
+    @property
+    def kinds(self) -> str:
+        out = [
+            name
+            for name, flag in (
+                ("extra", self.extra),
+                ("missing", self.missing),
+                ("tilted", self.tilt_deg >= TILTED_DEG),
+                ("concave", not self.convex),
+                ("open", not self.closed),
+            )
+            if flag
+        ]
+        return " ".join(out) or "faces right"
+
+
+OFFSET_DEG = 1000.0
+"""``--faces``: degrees a metre of offset counts as when matching a model face to a plane
+(1 mm as 1°): parallel planes of a composed solid (an L block's two tops) are told apart."""
+
+
+def check_faces(
+    faces: tuple[np.ndarray, np.ndarray],
+    planes: tuple[np.ndarray, np.ndarray],
+    *,
+    convex: bool,
+    closed: bool,
+) -> FaceCheck:
+    """Match each model face (rows of unit normals and offsets, ``faces``) to the nearest
+    plane of the object (``planes``): by angle, a metre of offset counting as
+    :data:`OFFSET_DEG`. A plane met by more than one face has extra faces (a split within
+    :data:`SPLIT_DEG` of it, else an edge's face, turned towards a neighbour), one met by
+    none is missing, and the tilt is the largest angle between a plane and the nearest of its
+    faces."""
+    (fn, fd), (pn, pd) = faces, planes
+    ang = np.degrees(np.arccos(np.clip(fn @ pn.T, -1.0, 1.0))).reshape(len(fn), len(pn))
+    cost = ang + OFFSET_DEG * np.abs(fd[:, None] - pd[None, :])
+    nearest = cost.argmin(axis=1) if len(fn) else np.zeros(0, dtype=int)
+    angle = ang[np.arange(len(fn)), nearest]
+    split = edge = 0
+    tilt = 0.0
+    for k in set(nearest.tolist()):
+        mine = np.sort(angle[nearest == k])
+        tilt = max(tilt, float(mine[0]))
+        split += int((mine[1:] < SPLIT_DEG).sum())
+        edge += int((mine[1:] >= SPLIT_DEG).sum())
+    return FaceCheck(
+        planes=len(pn),
+        faces=len(fn),
+        extra=split + edge,
+        split=split,
+        edge=edge,
+        missing=len(pn) - len(set(nearest.tolist())),
+        tilt_deg=tilt,
+        convex=convex,
+        closed=closed,
+    )
+
+
+def _faces_one(
+    job: tuple[Path, dict[str, str], trimesh.Trimesh],
+) -> tuple[dict[str, str], FaceCheck | str]:
+    folder, row, solid = job
+    path = folder / record_name(
+        row["explorer"], row["group"], row["name"], row["rules"], float(row["noise"])
+    )
+    try:
+        model = classify_record(ExplorationRecord.load(path), rules=row["rules"]).model
+    except Exception as exc:  # a benchmark reports failures, it does not stop on them
+        return row, f"{type(exc).__name__}: {exc}"[:200]
+    kept = [f for f in model.faces if f.source != "assumed"]
+    normals = np.asarray([f.normal for f in kept], dtype=float).reshape(-1, 3)
+    offsets = np.asarray([f.offset for f in kept], dtype=float)
+    return row, check_faces(
+        (normals, offsets),
+        true_planes(solid),
+        convex=model.convex,
+        closed=model.polyhedron is not None,
+    )
+
+
+def faces_report(folder: Path, draw: int, instances: int, seeds: int, workers: int) -> None:
+    """Compare the model of every record in ``folder`` (saved with ``--records``) with the
+    solid it was explored on: per group, the cases whose model has extra, missing or tilted
+    faces, is concave or open; then every wrong answer's model. The solids are made again
+    from ``draw``, ``instances`` and ``seeds``, which must be those of the run."""
+    index = folder / INDEX
+    if not index.is_file():
+        raise SystemExit(f"{index}: no such file (save records with --records {folder})")
+    with index.open(newline="") as f:
+        rows = [r for r in csv.DictReader(f) if not r["got"].startswith("error")]
+    levels = sorted({int(r["group"].split()[1]) for r in rows if r["group"].startswith("level ")})
+    families = {r["name"].split(":", 1)[0] for r in rows if r["group"] != "real"}
+    explorers = sorted({r["explorer"] for r in rows})
+    made = jobs(instances, seeds, levels, explorers, families, False, draw)
+    solids = {
+        (j.explorer, j.group, j.name, j.rules, j.noise): j.ideal if j.ideal is not None else j.mesh
+        for j in made
+    }
+    # a curved solid's tessellation is no set of faces to find
+    curved = {j.name for j in made if j.rules == "polyhedra" and j.label == "curved"}
+    todo = []
+    for r in rows:
+        if r["group"] == "real" or r["name"] in curved:
+            continue
+        key = (r["explorer"], r["group"], r["name"], r["rules"], float(r["noise"]))
+        if key not in solids:
+            raise SystemExit(
+                f"{index}: {r['group']} {r['name']!r} is not a case of --draw {draw} "
+                f"--instances {instances} --seeds {seeds} (give the run's)"
+            )
+        todo.append((folder, r, solids[key]))
+    if workers > 1:
+        with multiprocessing.get_context("fork").Pool(workers) as pool:
+            done = list(pool.imap(_faces_one, todo, 4))
+    else:
+        done = [_faces_one(t) for t in todo]
+    groups: dict[str, list[tuple[dict[str, str], FaceCheck]]] = {}
+    for row, check in done:
+        if isinstance(check, FaceCheck):
+            groups.setdefault(row["group"], []).append((row, check))
+    head = (
+        f"{'group':8s} {'cases':>5s} {'faces right':>11s} {'extra':>5s} {'split':>5s} "
+        f"{'edge':>5s} {'missing':>7s} {'tilted':>6s} {'concave':>7s} {'open':>4s}"
+    )
+    print(head)
+    print("-" * len(head))
+    for group, cs in sorted(groups.items()):
+        checks = [c for _, c in cs]
+        print(
+            f"{group:8s} {len(cs):5d} {sum(c.kinds == 'faces right' for c in checks):11d} "
+            f"{sum(c.extra > 0 for c in checks):5d} {sum(c.split > 0 for c in checks):5d} "
+            f"{sum(c.edge > 0 for c in checks):5d} {sum(c.missing > 0 for c in checks):7d} "
+            f"{sum(c.tilt_deg >= TILTED_DEG for c in checks):6d} "
+            f"{sum(not c.convex for c in checks):7d} {sum(not c.closed for c in checks):4d}"
+        )
+    wrong = [(r, c) for cs in groups.values() for r, c in cs if r["got"] != r["label"]]
+    if wrong:
+        print(f"\nwrong ({len(wrong)}), the model against the solid:")
+    for r, c in sorted(wrong, key=lambda rc: (rc[0]["group"], rc[0]["name"])):
+        print(
+            f"  [{r['explorer']} {r['group']} {r['rules']} noise {float(r['noise']):g}] "
+            f"{r['name']}: got {r['got']}; {c.faces} faces for {c.planes} planes, "
+            f"{c.extra} extra ({c.split} split, {c.edge} edge), {c.missing} missing, "
+            f"tilt {c.tilt_deg:.1f}°: {c.kinds}"
+        )
+
+
 def main(argv: list[str] | None = None) -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--instances", type=int, default=1, help="random objects per family")
@@ -386,7 +580,17 @@ def main(argv: list[str] | None = None) -> None:
         help="classify the records saved with --records in this directory again, print "
         "what changed, and stop",
     )
+    ap.add_argument(
+        "--faces",
+        type=Path,
+        help="compare the models of the records saved with --records in this directory "
+        "with the solids explored (made again from --draw, --instances and --seeds, which "
+        "must be the run's): extra, missing and tilted faces, per group and per wrong answer",
+    )
     args = ap.parse_args(argv if argv is not None else [])
+    if args.faces:
+        faces_report(args.faces, args.draw, args.instances, args.seeds, args.workers)
+        return
     if args.summarize:
         summary(read_log(args.summarize))
         return

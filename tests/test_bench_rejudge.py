@@ -1,9 +1,11 @@
-"""``benchmarks/bench_real.py --records DIR`` and ``--rejudge DIR`` (issue 10).
+"""``benchmarks/bench_real.py --records DIR``, ``--rejudge DIR`` and ``--faces DIR`` (issue 10).
 
 A saved exploration record holds everything the decision needs: classified again with the
 same code, every answer is the one given when it was explored. An answer the index says was
 different shows as changed, and a directory without an index, or with a file that is none, is
-refused in one line.
+refused in one line. ``--faces`` matches each model's faces to the planes of the solid
+explored: the matching is checked here on faces constructed from a box's planes, where every
+extra, missing and tilted face is known.
 """
 
 from __future__ import annotations
@@ -12,11 +14,14 @@ import csv
 import sys
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "benchmarks"))
 
 import bench_real
+
+from tactile_kb import solids
 
 
 @pytest.fixture(scope="module")
@@ -87,3 +92,88 @@ def test_a_file_that_is_no_index_is_refused_in_one_line(tmp_path: Path) -> None:
     assert str(err.value) == (
         f"{tmp_path / 'index.csv'}:1: not an index of --records (no column 'rules')"
     )
+
+
+def _box_planes() -> tuple[np.ndarray, np.ndarray]:
+    normals, offsets = bench_real.true_planes(solids.box(0.08, 0.06, 0.05))
+    order = np.lexsort(normals.T)  # a fixed order, whatever trimesh's
+    return normals[order], offsets[order]
+
+
+def test_the_planes_of_a_box_are_its_six_faces() -> None:
+    normals, offsets = _box_planes()
+    assert len(normals) == 6
+    # the box stands on the table (z = 0) centred over the origin: offsets a/2, b/2, 0 and c
+    got = sorted(zip(map(tuple, np.round(normals, 9) + 0.0), np.round(offsets, 9), strict=True))
+    assert got == sorted(
+        [
+            ((1.0, 0.0, 0.0), 0.04),
+            ((-1.0, 0.0, 0.0), 0.04),
+            ((0.0, 1.0, 0.0), 0.03),
+            ((0.0, -1.0, 0.0), 0.03),
+            ((0.0, 0.0, 1.0), 0.05),
+            ((0.0, 0.0, -1.0), 0.0),
+        ]
+    )
+
+
+def _turned(n: np.ndarray, deg: float) -> np.ndarray:
+    """``n`` turned by ``deg`` towards +z (or +x for a vertical normal)."""
+    other = np.array([0.0, 0.0, 1.0]) if abs(n[2]) < 0.9 else np.array([1.0, 0.0, 0.0])
+    t = other - (other @ n) * n
+    t /= np.linalg.norm(t)
+    a = np.radians(deg)
+    return np.cos(a) * n + np.sin(a) * t
+
+
+def test_extra_missing_and_tilted_faces_are_told_apart() -> None:
+    planes = _box_planes()
+    normals, offsets = planes
+    exact = bench_real.check_faces(planes, planes, convex=True, closed=True)
+    assert (exact.extra, exact.missing, exact.tilt_deg, exact.kinds) == (0, 0, 0.0, "faces right")
+    px = int(np.argmax(normals[:, 0]))
+    py = int(np.argmax(normals[:, 1]))
+    split = _turned(normals[px], 3.0)  # a second face of +x, 3° off: a split
+    edge = (normals[px] + normals[py]) / np.sqrt(2.0)  # between +x and +y: the edge's face
+    faces = (np.vstack([normals, split, edge]), np.concatenate([offsets, [0.04, 0.0495]]))
+    c = bench_real.check_faces(faces, planes, convex=True, closed=True)
+    assert (c.faces, c.extra, c.split, c.edge, c.missing) == (8, 2, 1, 1, 0)
+    assert c.tilt_deg == pytest.approx(0.0, abs=1e-9)
+    assert c.kinds == "extra"
+    # the +y face tilted by 6° and the +x face not touched at all
+    tilted = normals.copy()
+    tilted[py] = _turned(normals[py], 6.0)
+    keep = np.arange(6) != px
+    c = bench_real.check_faces((tilted[keep], offsets[keep]), planes, convex=False, closed=False)
+    assert (c.extra, c.missing) == (0, 1)
+    assert c.tilt_deg == pytest.approx(6.0, abs=1e-6)
+    assert c.kinds == "missing tilted concave open"
+
+
+def test_parallel_planes_are_matched_by_their_offsets() -> None:
+    # two tops 2 cm apart (an L block's): each model face finds its own, none is extra
+    n = np.array([[0.0, 0.0, 1.0], [0.0, 0.0, 1.0]])
+    planes = (n, np.array([0.03, 0.05]))
+    c = bench_real.check_faces((n, np.array([0.0502, 0.0299])), planes, convex=True, closed=True)
+    assert (c.extra, c.missing) == (0, 0)
+
+
+def test_the_models_of_saved_records_are_checked_against_their_solids(
+    saved: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    bench_real.main(["--faces", str(saved), "--workers", "1"])
+    out = capsys.readouterr().out
+    rows = {line.split()[0]: line.split()[1:] for line in out.splitlines()[2:4]}
+    # the ideal cube, explored under both rule files with exact and noisy contacts: four
+    # models, every one with the cube's six planes, none extra, missing, tilted, concave
+    assert rows["ideal"] == ["4", "4", "0", "0", "0", "0", "0", "0", "0"]
+    assert rows["level"][:2] == ["1", "4"]  # "level 1": the level-1 scans, four cases
+
+
+def test_records_of_another_draw_are_refused_in_one_line(saved: Path) -> None:
+    with pytest.raises(SystemExit) as err:
+        bench_real.main(["--faces", str(saved), "--draw", "5"])
+    msg = str(err.value)
+    assert msg.startswith(f"{saved / 'index.csv'}: ")
+    assert "is not a case of --draw 5 --instances 1 --seeds 1 (give the run's)" in msg
+    assert "\n" not in msg
