@@ -7,7 +7,7 @@ import math
 import numpy as np
 import pytest
 import trimesh
-from hypothesis import given, settings
+from hypothesis import example, given, settings
 from hypothesis import strategies as st
 from tactile_kb_mujoco.world import MujocoWorld
 
@@ -207,6 +207,8 @@ def worlds():
     aim=st.tuples(st.floats(-0.4, 0.4), st.floats(-0.4, 0.4)),
     turn=st.floats(-math.pi, math.pi),
 )
+# a grazing approach to the L block's face y = 0 (found by hypothesis): the ends lie 2 µm apart
+@example(name="L", azimuth=0.0, height=0.03125, aim=(0.0, -0.0625), turn=0.0)
 def test_same_events_as_the_analytic_world(worlds, name, azimuth, height, aim, turn):
     stepper, mj = worlds[name]
     mesh = OBJECTS[name][0]
@@ -217,7 +219,14 @@ def test_same_events_as_the_analytic_world(worlds, name, azimuth, height, aim, t
     u = tuple(u / np.linalg.norm(u))
     a, b = stepper.move(start, u, 0.5), mj.move(start, u, 0.5)
     assert (a.event, a.fired) == (b.event, b.fired)
-    np.testing.assert_allclose(a.end, b.end, atol=1e-6)
+    # both stop in the contact band, at depths a fraction of a micrometre apart; along a
+    # motion that meets the surface at a grazing angle that is 1/sin of it further apart
+    # (an L block's face met at 1.4°: 0.05 µm of depth, 2 µm along the motion)
+    sin = 1.0
+    if a.event == "touch":
+        q, dist, _ = trimesh.proximity.closest_point(mesh, [a.end])
+        sin = max(abs(float(np.dot((q[0] - np.asarray(a.end)) / dist[0], u))), 1e-3)
+    np.testing.assert_allclose(a.end, b.end, atol=1e-6 / sin)
     if a.event == "touch":
         sensor = a.closed[-1]
         cmd = (math.cos(turn), math.sin(turn), 0.0)
