@@ -313,8 +313,9 @@ def _rejudge_one(job: tuple[Path, dict[str, str]]) -> tuple[dict[str, str], str]
     return row, got
 
 
-def rejudge(folder: Path, workers: int) -> None:
-    """Classify the records saved with ``--records`` again; print what changed, per group."""
+def read_index(folder: Path) -> list[dict[str, str]]:
+    """The rows of a ``--records`` directory's index, those of failed cases left out (they
+    saved no record); one line naming the file when there is none or it is no such index."""
     index = folder / INDEX
     if not index.is_file():
         raise SystemExit(f"{index}: no such file (save records with --records {folder})")
@@ -327,7 +328,12 @@ def rejudge(folder: Path, workers: int) -> None:
         ]
         if missing:
             raise SystemExit(f"{index}:1: not an index of --records (no column {missing[0]!r})")
-        rows = [r for r in reader if not r["got"].startswith("error")]
+        return [r for r in reader if not r["got"].startswith("error")]
+
+
+def rejudge(folder: Path, workers: int) -> None:
+    """Classify the records saved with ``--records`` again; print what changed, per group."""
+    rows = read_index(folder)
     t0 = time.perf_counter()
     if workers > 1:
         with multiprocessing.get_context("fork").Pool(workers) as pool:
@@ -389,7 +395,6 @@ class FaceCheck:
 
     planes: int
     faces: int
-    extra: int
     split: int
     edge: int
     missing: int
@@ -411,6 +416,11 @@ class FaceCheck:
             if flag
         ]
         return " ".join(out) or "faces right"
+
+    @property
+    def extra(self) -> int:
+        """Faces beyond one per plane: the splits and the edges' faces."""
+        return self.split + self.edge
 
 
 OFFSET_DEG = 1000.0
@@ -438,7 +448,8 @@ def check_faces(
     angle = ang[np.arange(len(fn)), nearest]
     split = edge = 0
     tilt = 0.0
-    for k in set(nearest.tolist()):
+    met = set(nearest.tolist())
+    for k in met:
         mine = np.sort(angle[nearest == k])
         tilt = max(tilt, float(mine[0]))
         split += int((mine[1:] < SPLIT_DEG).sum())
@@ -446,10 +457,9 @@ def check_faces(
     return FaceCheck(
         planes=len(pn),
         faces=len(fn),
-        extra=split + edge,
         split=split,
         edge=edge,
-        missing=len(pn) - len(set(nearest.tolist())),
+        missing=len(pn) - len(met),
         tilt_deg=tilt,
         convex=convex,
         closed=closed,
@@ -484,10 +494,7 @@ def faces_report(folder: Path, draw: int, instances: int, seeds: int, workers: i
     faces, is concave or open; then every wrong answer's model. The solids are made again
     from ``draw``, ``instances`` and ``seeds``, which must be those of the run."""
     index = folder / INDEX
-    if not index.is_file():
-        raise SystemExit(f"{index}: no such file (save records with --records {folder})")
-    with index.open(newline="") as f:
-        rows = [r for r in csv.DictReader(f) if not r["got"].startswith("error")]
+    rows = read_index(folder)
     levels = sorted({int(r["group"].split()[1]) for r in rows if r["group"].startswith("level ")})
     families = {r["name"].split(":", 1)[0] for r in rows if r["group"] != "real"}
     explorers = sorted({r["explorer"] for r in rows})
@@ -515,9 +522,12 @@ def faces_report(folder: Path, draw: int, instances: int, seeds: int, workers: i
     else:
         done = [_faces_one(t) for t in todo]
     groups: dict[str, list[tuple[dict[str, str], FaceCheck]]] = {}
+    unread = []
     for row, check in done:
         if isinstance(check, FaceCheck):
             groups.setdefault(row["group"], []).append((row, check))
+        else:
+            unread.append(f"  [{row['group']}] {row['name']}: {check}")
     head = (
         f"{'group':8s} {'cases':>5s} {'faces right':>11s} {'extra':>5s} {'split':>5s} "
         f"{'edge':>5s} {'missing':>7s} {'tilted':>6s} {'concave':>7s} {'open':>4s}"
@@ -543,6 +553,9 @@ def faces_report(folder: Path, draw: int, instances: int, seeds: int, workers: i
             f"{c.extra} extra ({c.split} split, {c.edge} edge), {c.missing} missing, "
             f"tilt {c.tilt_deg:.1f}°: {c.kinds}"
         )
+    if unread:
+        print(f"\n{len(unread)} record(s) could not be modelled:")
+        print("\n".join(unread))
 
 
 def main(argv: list[str] | None = None) -> None:

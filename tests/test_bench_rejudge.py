@@ -177,3 +177,21 @@ def test_records_of_another_draw_are_refused_in_one_line(saved: Path) -> None:
     assert msg.startswith(f"{saved / 'index.csv'}: ")
     assert "is not a case of --draw 5 --instances 1 --seeds 1 (give the run's)" in msg
     assert "\n" not in msg
+
+
+def test_a_record_that_cannot_be_read_is_named_not_fatal(
+    saved: Path, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    for p in saved.iterdir():
+        (tmp_path / p.name).write_bytes(p.read_bytes())
+    row = next(r for r in _index(saved) if r["group"] == "ideal")
+    name = bench_real.record_name(
+        row["explorer"], row["group"], row["name"], row["rules"], float(row["noise"])
+    )
+    (tmp_path / name).write_text("{not json")
+    bench_real.main(["--faces", str(tmp_path), "--workers", "1"])
+    out = capsys.readouterr().out
+    assert "1 record(s) could not be modelled:" in out
+    assert f"  [ideal] {row['name']}: RecordError: " in out
+    rows = {line.split()[0]: line.split()[1:3] for line in out.splitlines()[2:4]}
+    assert rows["ideal"] == ["3", "3"]  # the other three ideal models, every face right
