@@ -90,6 +90,17 @@ COLLAPSE_SIGMAS = DEFAULTS.geometry.collapse_sigmas
 planes meeting at an octahedron's vertex split it into two joined by an edge of 1–4 mm
 (2–4 σ), while the shortest real edges of the test families are more than 5 σ long."""
 
+FAR_TOUCH_RHO = 2.0
+"""A face of one or two touches that :func:`~tactile_kb.geometry.planes.edge_faces` takes for
+an edge's stays when each of its tip centres lies further than ρ plus this many tip radii (and
+3 σ) outside the polyhedron of the other faces (:func:`_far_from_edges`): a tip on an edge
+of that polyhedron, sharp or rounded, has its centre within ρ of it, and bumps, letters and a
+scan's roughness lift it by a millimetre or two, while a touch that far out met a face the
+others lack. A 27 cm box lying on a side, whose contour ran out of motions before its far
+end, had that end met by one probe as two contacts 35 mm further than ρ outside the
+others' polyhedron (their sensors' normal 29° off on a rough scan), taken for an edge's: the
+model stayed open."""
+
 SUPPORT_SIGMAS = 3.0
 """Under declared noise a face's fitted plane may be turned by up to this many σ of its
 normal's uncertainty before a touched point beyond it makes it concave (:func:`_support`; a
@@ -402,7 +413,9 @@ def _far_from_edges(
     lying octagonal prism's slanted side, met by one layer near its lower edge), not an
     edge. So did a row whose tip centres lie, in the median, further than 1.25 ρ (and 3 σ)
     outside that polyhedron: an edge's touch is ρ from it, a rounded edge's nearer; one
-    further out met a part beyond a concave face (an L-block's foot). Such faces stay.
+    further out met a part beyond a concave face (an L-block's foot). Such faces stay, and
+    so does a face of one or two touches (no row) whose every tip centre lies further than
+    (1 + :data:`FAR_TOUCH_RHO`) ρ and 3 σ outside it (a face the others lack, met once).
     """
     if not drop:
         return drop
@@ -424,10 +437,14 @@ def _far_from_edges(
     out = []
     for k in drop:
         c = centres[list(faces[k].contacts)]
-        if len(c) < 3:
-            out.append(k)  # one or two touches are no row: an edge's, as edge_faces said
-            continue
         q = nearest_points(c, poly.normals, poly.offsets)
+        if len(c) < 3:
+            # one or two touches are no row: an edge's, as edge_faces said, unless every one
+            # lies too far outside the others' polyhedron for any edge of it
+            gap = float((np.linalg.norm(c - q, axis=1) - rho).min())
+            if gap <= FAR_TOUCH_RHO * rho + 3.0 * noise:
+                out.append(k)
+            continue
         seg = b - a
         t = np.clip(
             np.einsum("pij,ij->pi", q[:, None, :] - a[None], seg) / (seg * seg).sum(axis=1), 0, 1
