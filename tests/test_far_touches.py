@@ -97,53 +97,42 @@ def _box_without_its_far_end() -> tuple[list[Face], list[np.ndarray]]:
     return faces, centres
 
 
-def test_two_touches_of_the_far_end_are_a_face() -> None:
+def _judged(read: np.ndarray, points: list[np.ndarray]) -> tuple[bool, bool]:
+    """The box without its far end, and a face of touches at ``points`` each reading the
+    normal ``read``: whether ``edge_faces`` takes it for an edge's touches, and whether
+    ``_far_from_edges`` drops it then."""
     faces, centres = _box_without_its_far_end()
-    # the −x end met twice, the sensors reading a normal 29° off the end's
-    read = np.array([-math.cos(math.radians(29.0)), -math.sin(math.radians(29.0)), 0.0])
-    end = [np.array([-L, 0.010, 0.030]), np.array([-L, 0.014, 0.030])]
     start = len(centres)
-    centres.extend(p + RHO * read for p in end)
+    centres.extend(p + RHO * read for p in points)
     k = len(faces)
     faces.append(
         Face(
             tuple(float(x) for x in read),  # type: ignore[arg-type]
-            float(read @ end[0]),
-            2,
+            float(read @ points[0]),
+            len(points),
             0.0,
             CONE,
-            (start, start + 1),
+            tuple(range(start, len(centres))),
             False,
         )
     )
     c = np.asarray(centres)
     rounding = current().geometry.edge_rounding
-    # the tips lie outside the others' polyhedron, penetrating nothing: an edge's, by the
-    # edge test alone
-    assert k in edge_faces(tuple(faces), c, RHO, rounding=rounding)
-    assert _far_from_edges(tuple(faces), [k], c, RHO, 0.0, rounding) == []
+    edge = k in edge_faces(tuple(faces), c, RHO, rounding=rounding)
+    return edge, _far_from_edges(tuple(faces), [k], c, RHO, 0.0, rounding) == [k]
+
+
+def test_two_touches_of_the_far_end_are_a_face() -> None:
+    # the −x end met twice, the sensors reading a normal 29° off the end's: the tips lie
+    # outside the others' polyhedron, penetrating nothing, an edge's by the edge test alone
+    read = np.array([-math.cos(math.radians(29.0)), -math.sin(math.radians(29.0)), 0.0])
+    end = [np.array([-L, 0.010, 0.030]), np.array([-L, 0.014, 0.030])]
+    assert _judged(read, end) == (True, False)
 
 
 def test_two_touches_of_an_edge_stay_an_edges() -> None:
-    faces, centres = _box_without_its_far_end()
     # the edge between the +y side and the top, touched twice reading their bisector: the
     # tip centres ρ from the edge
     bisector = np.array([0.0, 1.0, 1.0]) / math.sqrt(2.0)
-    start = len(centres)
-    centres.extend(np.array([x, W, H]) + RHO * bisector for x in (0.02, 0.05))
-    k = len(faces)
-    faces.append(
-        Face(
-            tuple(float(v) for v in bisector),  # type: ignore[arg-type]
-            float(bisector @ np.array([0.02, W, H])),
-            2,
-            0.0,
-            CONE,
-            (start, start + 1),
-            False,
-        )
-    )
-    c = np.asarray(centres)
-    rounding = current().geometry.edge_rounding
-    assert k in edge_faces(tuple(faces), c, RHO, rounding=rounding)
-    assert _far_from_edges(tuple(faces), [k], c, RHO, 0.0, rounding) == [k]
+    edge = [np.array([x, W, H]) for x in (0.02, 0.05)]
+    assert _judged(bisector, edge) == (True, True)
