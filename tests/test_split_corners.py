@@ -65,8 +65,10 @@ def test_a_small_noisy_octahedron_is_an_octahedron(turn: float) -> None:
 
 def test_a_split_corner_counts_once() -> None:
     splits = 0
+    # (a split is a sample's chance: numpy 2.4.6 and scipy 1.17.1 split no corner in seeds
+    # 1–4; of 24 samples of turns 20°, 40° and 60° and seeds 1–8, turn 60°, seed 5 splits one)
     for turn in (20.0, 60.0):
-        for seed in (1, 2, 3, 4):
+        for seed in range(1, 7):
             result = classify(
                 _resting(turn), rules="polyhedra", noise=NOISE, seed=seed, finger="33"
             )
