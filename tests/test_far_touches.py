@@ -102,20 +102,8 @@ def _judged(read: np.ndarray, points: list[np.ndarray]) -> tuple[bool, bool]:
     normal ``read``: whether ``edge_faces`` takes it for an edge's touches, and whether
     ``_far_from_edges`` drops it then."""
     faces, centres = _box_without_its_far_end()
-    start = len(centres)
-    centres.extend(p + RHO * read for p in points)
     k = len(faces)
-    faces.append(
-        Face(
-            tuple(float(x) for x in read),  # type: ignore[arg-type]
-            float(read @ points[0]),
-            len(points),
-            0.0,
-            CONE,
-            tuple(range(start, len(centres))),
-            False,
-        )
-    )
+    faces.append(_face(read, points, centres, refined=False))
     c = np.asarray(centres)
     rounding = current().geometry.edge_rounding
     edge = k in edge_faces(tuple(faces), c, RHO, rounding=rounding)
