@@ -53,38 +53,14 @@ def _box_without_its_far_end() -> tuple[list[Face], list[np.ndarray]]:
     centres: list[np.ndarray] = []
     faces: list[Face] = []
     grid = [(u, v) for u in (-0.6, 0.0, 0.6) for v in (0.3, 0.7)]
-    faces.append(
-        _face(
-            np.array([0.0, 1.0, 0.0]),
-            [np.array([u * L, W, v * H]) for u, v in grid],
-            centres,
-            refined=True,
-        )
-    )
-    faces.append(
-        _face(
-            np.array([0.0, -1.0, 0.0]),
-            [np.array([u * L, -W, v * H]) for u, v in grid],
-            centres,
-            refined=True,
-        )
-    )
-    faces.append(
-        _face(
-            np.array([1.0, 0.0, 0.0]),
-            [np.array([L, u * W, v * H]) for u, v in grid],
-            centres,
-            refined=True,
-        )
-    )
-    faces.append(
-        _face(
-            np.array([0.0, 0.0, 1.0]),
-            [np.array([u * L, (v - 0.5) * W, H]) for u, v in grid],
-            centres,
-            refined=True,
-        )
-    )
+    sides = {
+        (0.0, 1.0, 0.0): [(u * L, W, v * H) for u, v in grid],
+        (0.0, -1.0, 0.0): [(u * L, -W, v * H) for u, v in grid],
+        (1.0, 0.0, 0.0): [(L, u * W, v * H) for u, v in grid],
+        (0.0, 0.0, 1.0): [(u * L, (v - 0.5) * W, H) for u, v in grid],
+    }
+    for normal, points in sides.items():
+        faces.append(_face(np.array(normal), [np.array(p) for p in points], centres, refined=True))
     faces.append(Face((0.0, 0.0, -1.0), 0.0, 0, 0.0, 0.0, (), False, "table"))
     corner = np.array([-0.8, -0.6, 0.0])
     through = np.array([-L + 0.045, -W, 0.0])  # its plane meets the −y side 45 mm in
