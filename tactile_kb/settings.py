@@ -528,6 +528,15 @@ class FeatureSettings(_Group):
         description="Degrees: the tip centres on one circle (circle_rho) must go at least this "
         "far round it.",
     )
+    sphere_fraction: float = Field(
+        0.015,
+        gt=0,
+        lt=1,
+        description="Fraction: every tip centre of the record on one sphere, missing it by an RMS "
+        "of at most this × its radius, with sensors that point at its centre, lies on a ball "
+        "(the benchmarks' polyhedra miss their best sphere by 2.5 % of its radius and more, "
+        "balls of 8 cm under a poor scan's relief by 1 %).",
+    )
     rel_tol: float = Field(
         0.06,
         gt=0,

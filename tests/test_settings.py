@@ -95,6 +95,7 @@ DOCUMENTED: dict[str, dict[str, float | str]] = {
         "circle_sigmas": 1.5,
         "circle_off_fraction": 0.25,
         "circle_arc_deg": 90.0,
+        "sphere_fraction": 0.015,
         "rel_tol": 0.06,
         "edge_sigmas": 4.0,
         "point_tol": 0.1,

@@ -88,6 +88,7 @@ if TYPE_CHECKING:  # the geometry (scipy) is imported when a feature is evaluate
     from tactile_kb.geometry.model import ObjectModel
     from tactile_kb.geometry.planes import Face
     from tactile_kb.geometry.polyhedron import Polyhedron
+    from tactile_kb.record import ExplorationRecord
     from tactile_kb.types import FloatArray, IntArray
 
 __all__ = [
@@ -95,6 +96,7 @@ __all__ = [
     "Feature",
     "available_features",
     "centres_on_circle",
+    "centres_on_sphere",
     "check_binding",
     "edge_uncertainties",
     "evaluate_feature",
@@ -610,7 +612,7 @@ def surface_curved(
         if sag > tol:
             return True
     bent, folds = _spread_evidence(model, spread_deg)
-    if bent or centres_on_circle(model):
+    if bent or centres_on_circle(model) or centres_on_sphere(model):
         return True
     p = model.polyhedron
     cos_smooth = math.cos(math.radians(smooth_deg))
@@ -627,13 +629,15 @@ def surface_curved(
     return smooth + folds >= min_smooth_edges
 
 
-def _circle_fit(pts: FloatArray) -> tuple[FloatArray, float, FloatArray]:
-    """The circle through 2-D points: its centre, radius and the points' signed misses
-    (algebraic fit, refined by Gauss-Newton steps on the geometric distances)."""
+def _round_fit(pts: FloatArray) -> tuple[FloatArray, float, FloatArray]:
+    """The circle through 2-D points, or the sphere through 3-D ones: its centre, radius and
+    the points' signed misses (algebraic fit, refined by Gauss-Newton steps on the geometric
+    distances)."""
+    dim = pts.shape[1]
     a = np.column_stack([2.0 * pts, np.ones(len(pts))])
     sol = np.linalg.lstsq(a, (pts**2).sum(axis=1), rcond=None)[0]
-    c = np.asarray(sol[:2], dtype=float)
-    r = math.sqrt(max(float(sol[2] + c @ c), 0.0))
+    c = np.asarray(sol[:dim], dtype=float)
+    r = math.sqrt(max(float(sol[dim] + c @ c), 0.0))
     for _ in range(5):
         d = pts - c
         dist = np.linalg.norm(d, axis=1)
@@ -641,7 +645,7 @@ def _circle_fit(pts: FloatArray) -> tuple[FloatArray, float, FloatArray]:
             break
         jac = np.column_stack([-d / dist[:, None], -np.ones(len(pts))])
         step = np.linalg.lstsq(jac, -(dist - r), rcond=None)[0]
-        c, r = c + step[:2], r + float(step[2])
+        c, r = c + step[:dim], r + float(step[dim])
     miss = np.linalg.norm(pts - c, axis=1) - r
     return c, r, np.asarray(miss, dtype=float)
 
@@ -656,7 +660,7 @@ def _off_axis(pts: FloatArray, d: FloatArray, rho: float, tol: float) -> FloatAr
     s = current().features
     if len(pts) < max(4, 2 * s.circle_faces):
         return None
-    c, r, miss = _circle_fit(pts)
+    c, r, miss = _round_fit(pts)
     rms = math.sqrt(float((miss**2).sum()) / (len(miss) - 3))
     if not (r > 1.5 * rho and rms <= tol):
         return None
@@ -744,14 +748,7 @@ def centres_on_circle(model: ObjectModel) -> bool:
         normals = np.asarray([f.normal for f in faces], dtype=float)
         centres = np.asarray([c.centre for c in record.contacts], dtype=float)
         directions = np.asarray([c.direction for c in record.contacts], dtype=float)
-        sensors = np.asarray(record.sensor_directions, dtype=float).reshape(-1, 3)
-        if len(sensors) >= 2:
-            m = sensors / np.linalg.norm(sensors, axis=1)[:, None]
-            cos = m @ m.T
-            np.fill_diagonal(cos, -1.0)
-            spacing = float(np.median(np.arccos(np.clip(cos.max(axis=1), -1.0, 1.0))))
-        else:
-            spacing = math.radians(30.0)
+        spacing = _sensor_spacing(record)
         # a reading's quantisation: two neighbouring sensors' mean lies within a third of
         # their spacing of the normal that closes both (cones overlapping by a third)
         quantum = spacing / 3.0
@@ -804,6 +801,74 @@ def centres_on_circle(model: ObjectModel) -> bool:
         return False
 
     return _derived(model, (__name__, current().features, "centres_on_circle"), compute)
+
+
+def _sensor_spacing(record: ExplorationRecord) -> float:
+    """The finger's median angle (radians) from a sensor to its nearest neighbour (30° when
+    the record names fewer than two sensors)."""
+    sensors = np.asarray(record.sensor_directions, dtype=float).reshape(-1, 3)
+    if len(sensors) < 2:
+        return math.radians(30.0)
+    m = sensors / np.linalg.norm(sensors, axis=1)[:, None]
+    cos = m @ m.T
+    np.fill_diagonal(cos, -1.0)
+    return float(np.median(np.arccos(np.clip(cos.max(axis=1), -1.0, 1.0))))
+
+
+def _distinct_directions(d: FloatArray, quantum: float) -> int:
+    """How many of the unit directions ``d`` (rows) lie more than ``quantum`` (radians) from
+    every one counted before them."""
+    kept: list[FloatArray] = []
+    cos_q = math.cos(quantum)
+    for v in d:
+        if all(float(v @ k) < cos_q for k in kept):
+            kept.append(v)
+    return len(kept)
+
+
+def centres_on_sphere(model: ObjectModel) -> bool:
+    """Every tip centre of the record lies on one sphere: a ball, whichever faces the model
+    made of its touches (a ball's contour layers are circles, and a slide along one fits a
+    plane of its own within a fraction of a millimetre).
+
+    Tip centres on a ball of radius R lie at R + ρ from its centre, each contact's sensor
+    pointing at it; a polyhedron's tip centres lie on its faces' offset planes, nearer the
+    centre in a face's middle than at its edges, so they miss their best sphere by a share
+    of its radius that the polyhedron's shape sets, not its size. Curved when the centres
+    (at least 2 × ``circle_faces``) miss one sphere by an RMS (n − 4 degrees of freedom) of
+    at most ``sphere_fraction`` × its radius, that radius is over 1.5 ρ and no larger than
+    the centres' extent (a flat face's centres fit a huge sphere over a small cap), their
+    sensors take at least ``circle_faces`` directions more than a reading's quantisation
+    apart (a third of the median sensor spacing), and the median sensor points within the
+    median sensor spacing of the sphere's centre (a bowl touched from inside has its
+    sensors point away from it). The tolerance is relative only: where noise or relief
+    swamps it (a small ball), the other tests decide."""
+
+    def compute() -> bool:
+        s = current().features
+        record = model.record
+        rho = record.tip_radius
+        centres = np.asarray([c.centre for c in record.contacts], dtype=float).reshape(-1, 3)
+        if len(centres) < max(5, 2 * s.circle_faces):
+            return False
+        directions = np.asarray([c.direction for c in record.contacts], dtype=float)
+        directions /= np.linalg.norm(directions, axis=1)[:, None]
+        centre, radius, miss = _round_fit(centres)
+        extent = float(np.ptp(centres, axis=0).max())
+        if not (1.5 * rho < radius <= extent):
+            return False
+        rms = math.sqrt(float((miss**2).sum()) / (len(miss) - 4))
+        if rms > s.sphere_fraction * radius:
+            return False
+        spacing = _sensor_spacing(record)
+        if _distinct_directions(directions, spacing / 3.0) < s.circle_faces:
+            return False
+        inward = centre - centres
+        inward /= np.maximum(np.linalg.norm(inward, axis=1), 1e-12)[:, None]
+        off = np.arccos(np.clip((directions * inward).sum(axis=1), -1.0, 1.0))
+        return float(np.median(off)) <= spacing
+
+    return _derived(model, (__name__, current().features, "centres_on_sphere"), compute)
 
 
 @dataclass(frozen=True)
