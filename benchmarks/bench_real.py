@@ -59,6 +59,7 @@ import trimesh
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 from bench_accuracy import FAMILIES, NOISE, faces_to_touch
+from versions import versions_line
 
 from tactile_kb.objects import load_object
 from tactile_kb.perturb import perturb
@@ -601,6 +602,8 @@ def main(argv: list[str] | None = None) -> None:
         "must be the run's): extra, missing and tilted faces, per group and per wrong answer",
     )
     args = ap.parse_args(argv if argv is not None else [])
+    if not args.summarize:  # a log's figures were measured with what wrote it
+        print(versions_line(), flush=True)
     if args.faces:
         faces_report(args.faces, args.draw, args.instances, args.seeds, args.workers)
         return

@@ -12,6 +12,8 @@ import sys
 import time
 from pathlib import Path
 
+from versions import versions_line
+
 HERE = Path(__file__).resolve().parent
 
 
@@ -22,6 +24,7 @@ def main(argv: list[str]) -> int:
     if unknown:
         print(f"unknown benchmark(s): {', '.join(unknown)} (known: {', '.join(known)})")
         return 2
+    print(versions_line(), flush=True)
     failed = 0
     for name, script in known.items():
         if wanted and name not in wanted:
