@@ -74,9 +74,9 @@ def versions_line(path: Path = CONSTRAINTS, *, most: int = 6) -> str:
         return f"versions: {', '.join(shown)} (as pinned in benchmarks/{path.name})"
     named = ", ".join(f"{n} {have} (pinned {want})" for n, have, want in diff[:most])
     more = f" and {len(diff) - most} more" if len(diff) > most else ""
+    verb = "differs" if len(diff) == 1 else "differ"
     return (
-        f"versions: {', '.join(shown)}; {len(diff)} {'differs' if len(diff) == 1 else 'differ'} "
-        f"from benchmarks/{path.name}: "
+        f"versions: {', '.join(shown)}; {len(diff)} {verb} from benchmarks/{path.name}: "
         f"{named}{more}"
     )
 

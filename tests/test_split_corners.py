@@ -64,9 +64,10 @@ def test_a_small_noisy_octahedron_is_an_octahedron(turn: float) -> None:
 
 
 def test_a_split_corner_counts_once() -> None:
-    # noisy touches sampled on the solid's faces (six a face, 0.5 mm), without an explorer in
-    # between: the same twenty records on every machine; in six of them the four planes of
-    # one corner meet along a short edge (seeds 2, 4, 13, 16, 17 and 19 when this was written)
+    # noisy touches sampled on the solid's faces (six a face, 0.5 mm), with no explorer in
+    # between: the records follow from the random generator alone, not from where a path
+    # turns on a rounding; in six of the twenty the four planes of one corner meet along a
+    # short edge (seeds 2, 4, 13, 16, 17 and 19 when this was written)
     splits = 0
     for seed in range(1, 21):
         record = sample_record(
