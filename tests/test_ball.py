@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+import trimesh
 
 from tactile_kb import solids
 from tactile_kb.features.builtin import centres_on_sphere, surface_curved
@@ -47,8 +48,8 @@ def test_a_ball_s_touches_lie_on_one_sphere(radius: float, seed: int) -> None:
     ids=["box", "cube", "octahedron", "prism8", "pyramid6", "frustum6"],
 )
 @pytest.mark.parametrize("noise", [0.0, 0.0005])
-def test_a_polyhedron_s_touches_miss_every_sphere(solid: object, noise: float) -> None:
-    record = sample_record(solid, F33, per_face=8, noise=noise, seed=3)  # type: ignore[arg-type]
+def test_a_polyhedron_s_touches_miss_every_sphere(solid: trimesh.Trimesh, noise: float) -> None:
+    record = sample_record(solid, F33, per_face=8, noise=noise, seed=3)
     assert not centres_on_sphere(build_model(record))
 
 
