@@ -386,6 +386,12 @@ def _draw_layers(ax: Any, model: ObjectModel, grasp: GraspPlan | None = None) ->
     from matplotlib import colormaps
 
     cmap = colormaps["viridis"]
+    rec = model.record
+    if rec.contacts:  # every contact, beneath the contours: where the finger found the object
+        pts = np.asarray([c.point for c in rec.contacts], dtype=float)
+        ax.scatter(
+            pts[:, 0], pts[:, 1], color="0.6", s=6, zorder=1, label=f"contact points ({len(pts)})"
+        )
     for k, lay in enumerate(layers):
         c = np.asarray(lay.contour, dtype=float)
         loop = np.vstack([c, c[:1]]) if lay.closed else c
@@ -398,7 +404,6 @@ def _draw_layers(ax: Any, model: ObjectModel, grasp: GraspPlan | None = None) ->
             ms=2.5,
             label=f"z = {lay.z * 1000:.0f} mm ({len(c)} corners)",
         )
-    rec = model.record
     for rec_layer in rec.layers:
         if rec_layer.path:
             p = np.asarray(rec_layer.path, dtype=np.float64)

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 from pathlib import Path
 
 import numpy as np
@@ -22,7 +23,7 @@ from tactile_kb.plot import (
     save_figure,
 )
 from tactile_kb.record import ExplorationRecord
-from tactile_kb.solids import box, l_shape
+from tactile_kb.solids import box, l_shape, sphere
 from tactile_kb.touch.explorers import get_explorer
 from tactile_kb.touch.finger import builtin_finger
 from tactile_kb.touch.synthetic import sample_record
@@ -96,6 +97,33 @@ def test_layers_panel_for_box_unions(tmp_path: Path) -> None:
     assert legend is not None
     assert any("6 corners" in t.get_text() for t in legend.get_texts())
     _drawn(tmp_path / "l.png", (360, 180))
+
+
+def test_the_view_from_above_shows_every_contact() -> None:
+    # a ball's model stays open when its slides fit planes of their own, and its one layer
+    # contour can be a few millimetres wide: the contact points seen from above show where the
+    # finger found the object, and the panel frames them all
+    ball = sample_record(sphere(0.06), builtin_finger("33"), total=40, seed=2)
+    contours = [c.model_copy(update={"layer": 0}) for c in ball.contacts[:3]]
+    record = ball.model_copy(update={"contacts": [*contours, *ball.contacts[3:]]})
+    model = build_model(record)
+    assert model.layers
+    assert len(model.layers[0].contour) >= 3
+    model = dataclasses.replace(model, polyhedron=None)  # as open as the scanned ball's
+    fig = plot_exploration(model)
+    ax = next(ax for ax in fig.axes if ax.get_title().startswith("layer contours"))
+    xy = np.asarray([c.point[:2] for c in record.contacts])
+    dots = [c for c in ax.collections if len(c.get_offsets()) == len(xy)]
+    assert len(dots) == 1
+    assert np.allclose(np.sort(dots[0].get_offsets(), axis=0), np.sort(xy, axis=0))
+    (x0, x1), (y0, y1) = ax.get_xlim(), ax.get_ylim()
+    assert x0 <= xy[:, 0].min()
+    assert xy[:, 0].max() <= x1
+    assert y0 <= xy[:, 1].min()
+    assert xy[:, 1].max() <= y1
+    legend = ax.get_legend()
+    assert legend is not None
+    assert f"contact points ({len(xy)})" in [t.get_text() for t in legend.get_texts()]
 
 
 def test_box_union_grasp_is_drawn_on_the_layer_model(tmp_path: Path) -> None:
