@@ -13,9 +13,11 @@ so a figure is read together with what it was measured with
 from __future__ import annotations
 
 import platform
-import re
 from importlib.metadata import PackageNotFoundError, version
 from pathlib import Path
+
+from packaging.requirements import InvalidRequirement, Requirement
+from packaging.utils import canonicalize_name
 
 CONSTRAINTS = Path(__file__).resolve().parent / "constraints.txt"
 
@@ -23,22 +25,22 @@ SHOWN = ("numpy", "scipy", "trimesh", "shapely", "rtree", "manifold3d", "sympy",
 """The packages whose versions the line always shows: those the geometry and the explorers
 compute with."""
 
-_PIN = re.compile(r"^([A-Za-z0-9][A-Za-z0-9._-]*)==([^\s;#]+)")
-
-
-def _canonical(name: str) -> str:
-    """A distribution name as the package index compares them (PEP 503)."""
-    return re.sub(r"[-_.]+", "-", name).lower()
-
 
 def pinned(path: Path = CONSTRAINTS) -> dict[str, str]:
-    """The ``name==version`` lines of a constraints file, by canonical name (comments, blank
-    lines and anything not pinned exactly are skipped)."""
+    """The ``name==version`` lines of a constraints file, by canonical name (PEP 503, as pip
+    compares them); comments, blank lines and anything not pinned exactly are skipped."""
     out: dict[str, str] = {}
     for line in path.read_text(encoding="utf-8").splitlines():
-        m = _PIN.match(line.strip())
-        if m:
-            out[_canonical(m.group(1))] = m.group(2)
+        text = line.split("#", 1)[0].strip()
+        if not text:
+            continue
+        try:
+            req = Requirement(text)
+        except InvalidRequirement:
+            continue
+        specs = list(req.specifier)
+        if len(specs) == 1 and specs[0].operator == "==":
+            out[canonicalize_name(req.name)] = specs[0].version
     return out
 
 

@@ -10,6 +10,7 @@ from pathlib import Path
 
 import pytest
 from packaging.requirements import Requirement
+from packaging.utils import canonicalize_name
 
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT / "benchmarks"))
@@ -32,7 +33,7 @@ def _requirements() -> list[Requirement]:
 @pytest.mark.parametrize("req", _requirements(), ids=lambda r: r.name)
 def test_every_dependency_is_pinned_within_the_project_s_bounds(req: Requirement) -> None:
     pins = versions.pinned()
-    name = versions._canonical(req.name)
+    name = canonicalize_name(req.name)
     assert name in pins, f"benchmarks/constraints.txt does not pin {req.name}"
     assert req.specifier.contains(pins[name], prereleases=True), (
         f"{req.name}=={pins[name]} is outside the project's {req}"
