@@ -2,7 +2,8 @@
 classified.
 
 Run: ``.venv/bin/python benchmarks/bench_real.py [--instances N] [--seeds N] [--levels 1,2,3]
-[--workers N] [--explorer NAME ...] [--family NAME ...] [--no-real] [--draw N] [--log FILE]`` (or
+[--workers N] [--explorer NAME ...] [--family NAME ...] [--no-real] [--draw N] [--log FILE]
+[--set GROUP.FIELD=VALUE ...] [--settings FILE.toml]`` (or
 ``python benchmarks/run.py real``). It never fails; it prints, per group (real objects; ideal
 solids; perturbed solids per level) and explorer:
 
@@ -33,16 +34,28 @@ final answer exactly for a change of what follows the exploration, and a first s
 change of the model, which the completion also consults: the exploration itself would then
 change where its probes do, and only a full run tells.
 
+``--set GROUP.FIELD=VALUE`` (repeatable) and ``--settings FILE.toml`` run, rejudge or match
+faces under other tolerances and budgets, as the command line's options of the same names do
+(docs/settings.md): ``--rejudge DIR --set geometry.edge_rounding=0.13`` screens a threshold
+over a whole draw's saved explorations in seconds. The settings changed are printed under the
+versions line.
+
 ``--faces DIR`` (with the run's ``--draw``, ``--instances`` and ``--seeds``) makes the solids
 again and matches each saved model's faces to their planes: per group, how many models have
 every face right, extra faces (a split of one face, or an edge's face between two), missing or
-tilted ones (5° or more), a concave or an open model; then each wrong answer's model. It says
-why an answer is wrong before anyone opens a record.
+tilted ones (5° or more), a concave or an open model, and how far the faces' normals are off
+in units of the uncertainty the model gives them (``z``: each plane's nearest face's tilt over
+that face's ``normal_uncertainty_deg``, median and 90th percentile; errors as uncertain as
+the model says, equal in every direction, give about 1.2 and 2.1, the Rayleigh
+distribution's; larger, the model is surer of its faces than they are right, and every
+tolerance widened by those uncertainties is too narrow); then each wrong answer's model. It
+says why an answer is wrong before anyone opens a record.
 """
 
 from __future__ import annotations
 
 import argparse
+import contextlib
 import csv
 import dataclasses
 import hashlib
@@ -50,6 +63,7 @@ import multiprocessing
 import statistics
 import sys
 import time
+from collections.abc import Iterator
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -61,6 +75,8 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 from bench_accuracy import FAMILIES, NOISE, faces_to_touch
 from versions import versions_line
 
+from tactile_kb import settings as tk_settings
+from tactile_kb.errors import UsageError
 from tactile_kb.objects import load_object
 from tactile_kb.perturb import perturb
 from tactile_kb.pipeline import classify, classify_record
@@ -88,6 +104,7 @@ class Job:
     explorer: str
     faces: int
     records: Path | None = None
+    settings: tk_settings.Settings | None = None
 
 
 @dataclass(frozen=True)
@@ -128,6 +145,29 @@ def _label_for(rules: str, poly_label: str, mesh: trimesh.Trimesh) -> str | None
     return "other_hexahedron" if faces_to_touch(mesh) + 1 == 6 else "not_hexahedron"
 
 
+@contextlib.contextmanager
+def _using(chosen: tk_settings.Settings | None) -> Iterator[None]:
+    """``chosen`` (``--set``, ``--settings``) in force inside the block; the defaults when None.
+    Each worker process enters it for each case: nothing relies on what a fork inherits."""
+    if chosen is None:
+        yield
+    else:
+        with tk_settings.use(chosen):
+            yield
+
+
+def chosen_settings(path: Path | None, sets: list[str]) -> tk_settings.Settings | None:
+    """The settings of ``--settings FILE`` then each ``--set``; None when neither was given.
+    A bad file or assignment is refused in one line naming it."""
+    if path is None and not sets:
+        return None
+    try:
+        base = tk_settings.load(path) if path is not None else tk_settings.DEFAULTS
+        return base.assigned(sets) if sets else base
+    except UsageError as exc:
+        raise SystemExit(str(exc)) from None
+
+
 def record_name(explorer: str, group: str, name: str, rules: str, noise: float) -> str:
     """The file name of a case's saved record (``--records``): a digest of what makes the case."""
     key = f"{explorer}|{group}|{name}|{rules}|{noise!r}"
@@ -137,7 +177,8 @@ def record_name(explorer: str, group: str, name: str, rules: str, noise: float) 
 def _classify(mesh: trimesh.Trimesh, job: Job) -> tuple[str, int, float]:
     t0 = time.perf_counter()
     try:
-        r = classify(mesh, rules=job.rules, explorer=job.explorer, noise=job.noise, seed=0)
+        with _using(job.settings):
+            r = classify(mesh, rules=job.rules, explorer=job.explorer, noise=job.noise, seed=0)
         got, touches = r.decision.label, r.record.touches
         if job.records is not None:
             r.record.save(
@@ -302,13 +343,17 @@ INDEX = "index.csv"
 """The list of a ``--records`` directory's records: one row per case, its outcome's fields."""
 
 
-def _rejudge_one(job: tuple[Path, dict[str, str]]) -> tuple[dict[str, str], str]:
-    folder, row = job
+def _rejudge_one(
+    job: tuple[Path, dict[str, str], tk_settings.Settings | None],
+) -> tuple[dict[str, str], str]:
+    folder, row, chosen = job
     path = folder / record_name(
         row["explorer"], row["group"], row["name"], row["rules"], float(row["noise"])
     )
     try:
-        got = classify_record(ExplorationRecord.load(path), rules=row["rules"]).decision.label
+        with _using(chosen):
+            record = ExplorationRecord.load(path)
+            got = classify_record(record, rules=row["rules"]).decision.label
     except Exception as exc:  # a benchmark reports failures, it does not stop on them
         got = f"error: {type(exc).__name__}: {exc}"[:200]
     return row, got
@@ -332,15 +377,17 @@ def read_index(folder: Path) -> list[dict[str, str]]:
         return [r for r in reader if not r["got"].startswith("error")]
 
 
-def rejudge(folder: Path, workers: int) -> None:
-    """Classify the records saved with ``--records`` again; print what changed, per group."""
+def rejudge(folder: Path, workers: int, chosen: tk_settings.Settings | None = None) -> None:
+    """Classify the records saved with ``--records`` again (under ``chosen`` settings, when
+    given); print what changed, per group."""
     rows = read_index(folder)
     t0 = time.perf_counter()
+    todo = [(folder, r, chosen) for r in rows]
     if workers > 1:
         with multiprocessing.get_context("fork").Pool(workers) as pool:
-            done = list(pool.imap_unordered(_rejudge_one, [(folder, r) for r in rows], 4))
+            done = list(pool.imap_unordered(_rejudge_one, todo, 4))
     else:
-        done = [_rejudge_one((folder, r)) for r in rows]
+        done = [_rejudge_one(t) for t in todo]
     groups: dict[tuple[str, str], list[int]] = {}
     changed = []
     for row, got in done:
@@ -402,6 +449,9 @@ class FaceCheck:
     tilt_deg: float
     convex: bool
     closed: bool
+    z: tuple[float, ...] = ()
+    """Per plane met, its nearest face's tilt over that face's normal uncertainty (at least
+    :data:`Z_FLOOR_DEG`)."""
 
     @property
     def kinds(self) -> str:
@@ -424,6 +474,11 @@ class FaceCheck:
         return self.split + self.edge
 
 
+Z_FLOOR_DEG = 0.1
+"""``--faces``: a face's normal uncertainty counts as at least this (degrees) in ``z``: an
+exact record's faces fit their planes to rounding, and a tilt of a millionth of a degree over
+that is no miscalibration any tolerance (5° and more) would feel."""
+
 OFFSET_DEG = 1000.0
 """``--faces``: degrees a metre of offset counts as when matching a model face to a plane
 (1 mm as 1°): parallel planes of a composed solid (an L block's two tops) are told apart."""
@@ -435,13 +490,15 @@ def check_faces(
     *,
     convex: bool,
     closed: bool,
+    uncertainty: np.ndarray | None = None,
 ) -> FaceCheck:
     """Match each model face (rows of unit normals and offsets, ``faces``) to the nearest
     plane of the object (``planes``): by angle, a metre of offset counting as
     :data:`OFFSET_DEG`. A plane met by more than one face has extra faces (a split within
     :data:`SPLIT_DEG` of it, else an edge's face, turned towards a neighbour), one met by
     none is missing, and the tilt is the largest angle between a plane and the nearest of its
-    faces."""
+    faces. With ``uncertainty`` (degrees, per face), each plane's nearest face's tilt over
+    its uncertainty (at least :data:`Z_FLOOR_DEG`) is ``z``."""
     (fn, fd), (pn, pd) = faces, planes
     ang = np.degrees(np.arccos(np.clip(fn @ pn.T, -1.0, 1.0))).reshape(len(fn), len(pn))
     cost = ang + OFFSET_DEG * np.abs(fd[:, None] - pd[None, :])
@@ -449,9 +506,14 @@ def check_faces(
     angle = ang[np.arange(len(fn)), nearest]
     split = edge = 0
     tilt = 0.0
+    z = []
     met = set(nearest.tolist())
-    for k in met:
-        mine = np.sort(angle[nearest == k])
+    for k in sorted(met):
+        idx = np.flatnonzero(nearest == k)
+        best = int(idx[np.argmin(angle[idx])])
+        if uncertainty is not None:
+            z.append(float(angle[best] / max(float(uncertainty[best]), Z_FLOOR_DEG)))
+        mine = np.sort(angle[idx])
         tilt = max(tilt, float(mine[0]))
         split += int((mine[1:] < SPLIT_DEG).sum())
         edge += int((mine[1:] >= SPLIT_DEG).sum())
@@ -464,18 +526,20 @@ def check_faces(
         tilt_deg=tilt,
         convex=convex,
         closed=closed,
+        z=tuple(z),
     )
 
 
 def _faces_one(
-    job: tuple[Path, dict[str, str], trimesh.Trimesh],
+    job: tuple[Path, dict[str, str], trimesh.Trimesh, tk_settings.Settings | None],
 ) -> tuple[dict[str, str], FaceCheck | str]:
-    folder, row, solid = job
+    folder, row, solid, chosen = job
     path = folder / record_name(
         row["explorer"], row["group"], row["name"], row["rules"], float(row["noise"])
     )
     try:
-        model = classify_record(ExplorationRecord.load(path), rules=row["rules"]).model
+        with _using(chosen):
+            model = classify_record(ExplorationRecord.load(path), rules=row["rules"]).model
     except Exception as exc:  # a benchmark reports failures, it does not stop on them
         return row, f"{type(exc).__name__}: {exc}"[:200]
     kept = [f for f in model.faces if f.source != "assumed"]
@@ -486,10 +550,27 @@ def _faces_one(
         true_planes(solid),
         convex=model.convex,
         closed=model.polyhedron is not None,
+        uncertainty=np.asarray([f.normal_uncertainty_deg for f in kept], dtype=float),
     )
 
 
-def faces_report(folder: Path, draw: int, instances: int, seeds: int, workers: int) -> None:
+def _z_columns(checks: list[FaceCheck]) -> str:
+    """The ``z50`` and ``z90`` columns: the median and 90th percentile of the checks' ``z``."""
+    z = [v for c in checks for v in c.z]
+    if not z:
+        return f"{'-':>5s} {'-':>5s}"
+    z50, z90 = np.percentile(z, [50, 90])
+    return f"{z50:5.1f} {z90:5.1f}"
+
+
+def faces_report(
+    folder: Path,
+    draw: int,
+    instances: int,
+    seeds: int,
+    workers: int,
+    chosen: tk_settings.Settings | None = None,
+) -> None:
     """Compare the model of every record in ``folder`` (saved with ``--records``) with the
     solid it was explored on: per group, the cases whose model has extra, missing or tilted
     faces, is concave or open; then every wrong answer's model. The solids are made again
@@ -516,7 +597,7 @@ def faces_report(folder: Path, draw: int, instances: int, seeds: int, workers: i
                 f"{index}: {r['group']} {r['name']!r} is not a case of --draw {draw} "
                 f"--instances {instances} --seeds {seeds} (give the run's)"
             )
-        todo.append((folder, r, solids[key]))
+        todo.append((folder, r, solids[key], chosen))
     if workers > 1:
         with multiprocessing.get_context("fork").Pool(workers) as pool:
             done = list(pool.imap(_faces_one, todo, 4))
@@ -531,7 +612,8 @@ def faces_report(folder: Path, draw: int, instances: int, seeds: int, workers: i
             unread.append(f"  [{row['group']}] {row['name']}: {check}")
     head = (
         f"{'group':8s} {'cases':>5s} {'faces right':>11s} {'extra':>5s} {'split':>5s} "
-        f"{'edge':>5s} {'missing':>7s} {'tilted':>6s} {'concave':>7s} {'open':>4s}"
+        f"{'edge':>5s} {'missing':>7s} {'tilted':>6s} {'concave':>7s} {'open':>4s} "
+        f"{'z50':>5s} {'z90':>5s}"
     )
     print(head)
     print("-" * len(head))
@@ -542,7 +624,8 @@ def faces_report(folder: Path, draw: int, instances: int, seeds: int, workers: i
             f"{sum(c.extra > 0 for c in checks):5d} {sum(c.split > 0 for c in checks):5d} "
             f"{sum(c.edge > 0 for c in checks):5d} {sum(c.missing > 0 for c in checks):7d} "
             f"{sum(c.tilt_deg >= TILTED_DEG for c in checks):6d} "
-            f"{sum(not c.convex for c in checks):7d} {sum(not c.closed for c in checks):4d}"
+            f"{sum(not c.convex for c in checks):7d} {sum(not c.closed for c in checks):4d} "
+            f"{_z_columns(checks)}"
         )
     wrong = [(r, c) for cs in groups.values() for r, c in cs if r["got"] != r["label"]]
     if wrong:
@@ -601,17 +684,36 @@ def main(argv: list[str] | None = None) -> None:
         "with the solids explored (made again from --draw, --instances and --seeds, which "
         "must be the run's): extra, missing and tilted faces, per group and per wrong answer",
     )
+    ap.add_argument(
+        "--settings",
+        type=Path,
+        metavar="FILE.toml",
+        help="tolerances and budgets from a TOML file, one [group] table each (docs/settings.md)",
+    )
+    ap.add_argument(
+        "--set",
+        action="append",
+        default=[],
+        metavar="GROUP.FIELD=VALUE",
+        help="change one setting, e.g. geometry.edge_rounding=0.13 (repeatable; after --settings)",
+    )
     args = ap.parse_args(argv if argv is not None else [])
+    chosen = chosen_settings(args.settings, args.set)
     if not args.summarize:  # a log's figures were measured with what wrote it
         print(versions_line(), flush=True)
+        if chosen is not None:
+            given = ([f"--settings {args.settings}"] if args.settings else []) + [
+                f"--set {a}" for a in args.set
+            ]
+            print("settings: " + " ".join(given), flush=True)
     if args.faces:
-        faces_report(args.faces, args.draw, args.instances, args.seeds, args.workers)
+        faces_report(args.faces, args.draw, args.instances, args.seeds, args.workers, chosen)
         return
     if args.summarize:
         summary(read_log(args.summarize))
         return
     if args.rejudge:
-        rejudge(args.rejudge, args.workers)
+        rejudge(args.rejudge, args.workers, chosen)
         return
     known = available_explorers()
     explorers = args.explorer or [e for e in ("stepper", "mujoco") if e in known]
@@ -627,7 +729,7 @@ def main(argv: list[str] | None = None) -> None:
     )
     # In a shuffled order, an interrupted run's log is a fair sample of the whole.
     order = np.random.default_rng(0).permutation(len(todo))
-    todo = [todo[int(k)] for k in order]
+    todo = [dataclasses.replace(todo[int(k)], settings=chosen) for k in order]
     if args.reverse:
         todo.reverse()
     index_file = index = None

@@ -77,6 +77,52 @@ def test_an_answer_the_index_holds_otherwise_is_reported_changed(
     assert f"was prism, now {rows[k]['label']}" in out
 
 
+def test_rejudged_under_other_settings_the_answers_follow_them(
+    saved: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """``--set``: with right angles allowed no tolerance at all (1e-6°, no σ widening), only
+    the exact ideal cube's faces, fitted from exact tip centres, still meet at right angles:
+    every record of a scan or under noise loses its "cube", the exact ideal one keeps it. The
+    settings are printed under the versions line."""
+    sets = ["--set", "features.tolerance_deg=0.000001", "--set", "features.sigmas=0"]
+    bench_real.main(["--rejudge", str(saved), "--workers", "1", *sets])
+    out = capsys.readouterr().out
+    assert "settings: --set features.tolerance_deg=0.000001 --set features.sigmas=0" in out
+    rows = _index(saved)
+    assert all(r["got"] == r["label"] for r in rows)  # as explored, with the defaults
+    exact_ideal = [r for r in rows if r["group"] == "ideal" and float(r["noise"]) == 0.0]
+    assert len(exact_ideal) == 2  # under both rule files
+    assert f"{len(rows) - len(exact_ideal)} answer(s) changed:" in out
+    for r in rows:
+        line = f"lost: [stepper {r['group']} {r['rules']} noise {float(r['noise']):g}]"
+        assert (line in out) == (r not in exact_ideal), line
+
+
+@pytest.mark.parametrize(
+    ("given", "message"),
+    [
+        (["--set", "geometry.nosuch=1"], "--set geometry.nosuch=1: geometry.nosuch: Extra inputs"),
+        (
+            ["--set", "geometry.edge_rounding=-1"],
+            "--set geometry.edge_rounding=-1: geometry.edge_rounding: Input should be greater",
+        ),
+        (["--set", "edge_rounding"], "--set 'edge_rounding': expected GROUP.FIELD=VALUE"),
+    ],
+)
+def test_a_bad_setting_is_refused_in_one_line(saved: Path, given: list[str], message: str) -> None:
+    with pytest.raises(SystemExit) as err:
+        bench_real.main(["--rejudge", str(saved), *given])
+    assert str(err.value).startswith(message)
+    assert "\n" not in str(err.value)
+
+
+def test_a_missing_settings_file_is_refused_in_one_line(saved: Path, tmp_path: Path) -> None:
+    missing = tmp_path / "none.toml"
+    with pytest.raises(SystemExit) as err:
+        bench_real.main(["--rejudge", str(saved), "--settings", str(missing)])
+    assert str(err.value).startswith(f"{missing}: cannot read the settings file")
+
+
 def test_a_folder_without_an_index_is_refused_in_one_line(tmp_path: Path) -> None:
     with pytest.raises(SystemExit) as err:
         bench_real.main(["--rejudge", str(tmp_path)])
@@ -150,6 +196,35 @@ def test_extra_missing_and_tilted_faces_are_told_apart() -> None:
     assert c.kinds == "missing tilted concave open"
 
 
+def test_the_tilts_are_measured_in_the_faces_uncertainties() -> None:
+    """``z``: each plane's nearest face's tilt over that face's uncertainty. The +y face
+    tilted by 6° with an uncertainty of 2° is 3 of them off; the others, exact, 0; an extra
+    face (a split) and an exact face's uncertainty below the floor do not count."""
+    planes = _box_planes()
+    normals, offsets = planes
+    px = int(np.argmax(normals[:, 0]))
+    py = int(np.argmax(normals[:, 1]))
+    tilted = normals.copy()
+    tilted[py] = _turned(normals[py], 6.0)
+    split = _turned(normals[px], 3.0)
+    faces = (np.vstack([tilted, split]), np.concatenate([offsets, [0.04]]))
+    unc = np.full(7, 1.0)
+    unc[py] = 2.0
+    unc[px] = 1e-9  # an exact face: the floor
+    c = bench_real.check_faces(faces, planes, convex=True, closed=True, uncertainty=unc)
+    assert len(c.z) == 6  # one per plane, the split left out
+    assert sorted(c.z)[-1] == pytest.approx(3.0, abs=1e-6)
+    assert sorted(c.z)[:-1] == pytest.approx([0.0] * 5, abs=1e-6)
+    # a face 0.5° off with an uncertainty of 1e-9°: counted against the floor, 0.1°
+    slight = normals.copy()
+    slight[px] = _turned(normals[px], 0.5)
+    c = bench_real.check_faces(
+        (slight, offsets), planes, convex=True, closed=True, uncertainty=unc[:6]
+    )
+    assert max(c.z) == pytest.approx(0.5 / bench_real.Z_FLOOR_DEG, abs=1e-6)
+    assert bench_real.check_faces(planes, planes, convex=True, closed=True).z == ()
+
+
 def test_parallel_planes_are_matched_by_their_offsets() -> None:
     # two tops 2 cm apart (an L block's): each model face finds its own, none is extra
     n = np.array([[0.0, 0.0, 1.0], [0.0, 0.0, 1.0]])
@@ -174,8 +249,11 @@ def test_the_models_of_saved_records_are_checked_against_their_solids(
     rows = _table_rows(out)
     # the ideal cube, explored under both rule files with exact and noisy contacts: four
     # models, every one with the cube's six planes, none extra, missing, tilted, concave
-    assert rows["ideal"] == ["4", "4", "0", "0", "0", "0", "0", "0", "0"]
+    assert rows["ideal"][:9] == ["4", "4", "0", "0", "0", "0", "0", "0", "0"]
     assert rows["level"][:2] == ["1", "4"]  # "level 1": the level-1 scans, four cases
+    # the tilts in units of the faces' uncertainties: median and 90th percentile, numbers
+    z50, z90 = (float(v) for v in rows["ideal"][9:])
+    assert 0.0 <= z50 <= z90
 
 
 def test_records_of_another_draw_are_refused_in_one_line(saved: Path) -> None:
