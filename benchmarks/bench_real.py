@@ -76,6 +76,7 @@ from bench_accuracy import FAMILIES, NOISE, faces_to_touch
 from versions import versions_line
 
 from tactile_kb import settings as tk_settings
+from tactile_kb.cli.options import chosen_settings as cli_settings
 from tactile_kb.errors import UsageError
 from tactile_kb.objects import load_object
 from tactile_kb.perturb import perturb
@@ -156,16 +157,15 @@ def _using(chosen: tk_settings.Settings | None) -> Iterator[None]:
             yield
 
 
-def chosen_settings(path: Path | None, sets: list[str]) -> tk_settings.Settings | None:
-    """The settings of ``--settings FILE`` then each ``--set``; None when neither was given.
-    A bad file or assignment is refused in one line naming it."""
-    if path is None and not sets:
-        return None
+def chosen_settings(args: argparse.Namespace) -> tk_settings.Settings | None:
+    """The settings of ``--settings FILE`` then each ``--set``, as the command line chooses
+    them (:func:`tactile_kb.cli.options.chosen_settings`); None when neither was given. A bad
+    file or assignment is refused in one line naming it."""
     try:
-        base = tk_settings.load(path) if path is not None else tk_settings.DEFAULTS
-        return base.assigned(sets) if sets else base
+        chosen: tk_settings.Settings | None = cli_settings(args)
     except UsageError as exc:
         raise SystemExit(str(exc)) from None
+    return chosen
 
 
 def record_name(explorer: str, group: str, name: str, rules: str, noise: float) -> str:
@@ -698,7 +698,7 @@ def main(argv: list[str] | None = None) -> None:
         help="change one setting, e.g. geometry.edge_rounding=0.13 (repeatable; after --settings)",
     )
     args = ap.parse_args(argv if argv is not None else [])
-    chosen = chosen_settings(args.settings, args.set)
+    chosen = chosen_settings(args)
     if not args.summarize:  # a log's figures were measured with what wrote it
         print(versions_line(), flush=True)
         if chosen is not None:
