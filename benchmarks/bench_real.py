@@ -63,7 +63,6 @@ import multiprocessing
 import statistics
 import sys
 import time
-from collections.abc import Iterator
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -146,15 +145,10 @@ def _label_for(rules: str, poly_label: str, mesh: trimesh.Trimesh) -> str | None
     return "other_hexahedron" if faces_to_touch(mesh) + 1 == 6 else "not_hexahedron"
 
 
-@contextlib.contextmanager
-def _using(chosen: tk_settings.Settings | None) -> Iterator[None]:
+def _using(chosen: tk_settings.Settings | None) -> contextlib.AbstractContextManager[object]:
     """``chosen`` (``--set``, ``--settings``) in force inside the block; the defaults when None.
     Each worker process enters it for each case: nothing relies on what a fork inherits."""
-    if chosen is None:
-        yield
-    else:
-        with tk_settings.use(chosen):
-            yield
+    return tk_settings.use(chosen) if chosen is not None else contextlib.nullcontext()
 
 
 def chosen_settings(args: argparse.Namespace) -> tk_settings.Settings | None:
