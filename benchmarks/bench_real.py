@@ -504,10 +504,10 @@ def check_faces(
     met = set(nearest.tolist())
     for k in sorted(met):
         idx = np.flatnonzero(nearest == k)
-        best = int(idx[np.argmin(angle[idx])])
+        idx = idx[np.argsort(angle[idx])]  # the plane's nearest face first
         if uncertainty is not None:
-            z.append(float(angle[best] / max(float(uncertainty[best]), Z_FLOOR_DEG)))
-        mine = np.sort(angle[idx])
+            z.append(float(angle[idx[0]] / max(float(uncertainty[idx[0]]), Z_FLOOR_DEG)))
+        mine = angle[idx]
         tilt = max(tilt, float(mine[0]))
         split += int((mine[1:] < SPLIT_DEG).sum())
         edge += int((mine[1:] >= SPLIT_DEG).sum())

@@ -198,8 +198,8 @@ def test_extra_missing_and_tilted_faces_are_told_apart() -> None:
 
 def test_the_tilts_are_measured_in_the_faces_uncertainties() -> None:
     """``z``: each plane's nearest face's tilt over that face's uncertainty. The +y face
-    tilted by 6° with an uncertainty of 2° is 3 of them off; the others, exact, 0; an extra
-    face (a split) and an exact face's uncertainty below the floor do not count."""
+    tilted by 6° with an uncertainty of 2° is 3 of them off; the others, exact, 0. An extra
+    face (a split) does not count, and an uncertainty below the floor counts as the floor."""
     planes = _box_planes()
     normals, offsets = planes
     px = int(np.argmax(normals[:, 0]))
