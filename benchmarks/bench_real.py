@@ -50,6 +50,12 @@ the model says, equal in every direction, give about 1.2 and 2.1, the Rayleigh
 distribution's; larger, the model is surer of its faces than they are right, and every
 tolerance widened by those uncertainties is too narrow); then each wrong answer's model. It
 says why an answer is wrong before anyone opens a record.
+
+``--truth ITEMS`` (with ``--rejudge`` or ``--faces`` and the run's ``--draw``, ``--instances``
+and ``--seeds``) first puts the solids' truth into the records (``benchmarks/truth.py``):
+``roundings`` drops the touches of rounded edges, ``readings`` gives the other touches the
+sensors an ideal face fires, ``centres`` puts their tip centres ρ from the ideal surface. What
+an item gains is what a perfect cure of that imperfection could gain.
 """
 
 from __future__ import annotations
@@ -72,6 +78,7 @@ import trimesh
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 from bench_accuracy import FAMILIES, NOISE, faces_to_touch
+from truth import corrected, parse_items, true_planes
 from versions import versions_line
 
 from tactile_kb import settings as tk_settings
@@ -337,16 +344,30 @@ INDEX = "index.csv"
 """The list of a ``--records`` directory's records: one row per case, its outcome's fields."""
 
 
-def _rejudge_one(
-    job: tuple[Path, dict[str, str], tk_settings.Settings | None],
-) -> tuple[dict[str, str], str]:
-    folder, row, chosen = job
-    path = folder / record_name(
-        row["explorer"], row["group"], row["name"], row["rules"], float(row["noise"])
+def _record(
+    folder: Path, row: dict[str, str], solid: trimesh.Trimesh | None, truth: tuple[str, ...]
+) -> ExplorationRecord:
+    """The record of ``row`` saved in ``folder``, with ``truth`` (:mod:`truth`) put in from
+    ``solid`` when both are given."""
+    record = ExplorationRecord.load(
+        folder
+        / record_name(row["explorer"], row["group"], row["name"], row["rules"], float(row["noise"]))
     )
+    if truth and solid is not None:
+        record = corrected(record, solid, row["group"], truth)
+    return record
+
+
+RejudgeJob = tuple[
+    Path, dict[str, str], tk_settings.Settings | None, trimesh.Trimesh | None, tuple[str, ...]
+]
+
+
+def _rejudge_one(job: RejudgeJob) -> tuple[dict[str, str], str]:
+    folder, row, chosen, solid, truth = job
     try:
         with _using(chosen):
-            record = ExplorationRecord.load(path)
+            record = _record(folder, row, solid, truth)
             got = classify_record(record, rules=row["rules"]).decision.label
     except Exception as exc:  # a benchmark reports failures, it does not stop on them
         got = f"error: {type(exc).__name__}: {exc}"[:200]
@@ -371,12 +392,24 @@ def read_index(folder: Path) -> list[dict[str, str]]:
         return [r for r in reader if not r["got"].startswith("error")]
 
 
-def rejudge(folder: Path, workers: int, chosen: tk_settings.Settings | None = None) -> None:
+def rejudge(
+    folder: Path,
+    workers: int,
+    chosen: tk_settings.Settings | None = None,
+    truth: tuple[str, ...] = (),
+    solids: dict[tuple[str, str, str, str, float], trimesh.Trimesh] | None = None,
+) -> None:
     """Classify the records saved with ``--records`` again (under ``chosen`` settings, when
-    given); print what changed, per group."""
+    given; with ``truth`` put in from the ``solids`` explored, keyed by :func:`_case`);
+    print what changed, per group."""
     rows = read_index(folder)
     t0 = time.perf_counter()
-    todo = [(folder, r, chosen) for r in rows]
+    solids = solids or {}
+    todo: list[RejudgeJob] = [(folder, r, chosen, solids.get(_case(r)), truth) for r in rows]
+    if truth:
+        alone = sum(_case(r) not in solids for r in rows)
+        print(f"truth: {', '.join(truth)} put into {len(rows) - alone} records", end="")
+        print(f" ({alone} with no solid to take it from, as they are)" if alone else "")
     if workers > 1:
         with multiprocessing.get_context("fork").Pool(workers) as pool:
             done = list(pool.imap_unordered(_rejudge_one, todo, 4))
@@ -411,24 +444,6 @@ tilted."""
 SPLIT_DEG = 8.0
 """``--faces``: a second model face of one plane of the object within this angle of it is a
 split of that face; further, and between two of the object's planes, an edge's face."""
-
-
-def true_planes(mesh: trimesh.Trimesh) -> tuple[np.ndarray, np.ndarray]:
-    """The planes ``n · x = d`` of ``mesh`` (outward unit normals ``n``, offsets ``d``): its
-    facets (coplanar triangles) and the triangles in none."""
-    normals = [np.asarray(n, dtype=float) for n in mesh.facets_normal]
-    offsets = [
-        float(np.asarray(n) @ mesh.vertices[mesh.faces[facet[0], 0]])
-        for n, facet in zip(mesh.facets_normal, mesh.facets, strict=True)
-    ]
-    alone = np.ones(len(mesh.faces), dtype=bool)
-    for facet in mesh.facets:
-        alone[facet] = False
-    for k in np.flatnonzero(alone):
-        n = np.asarray(mesh.face_normals[k], dtype=float)
-        normals.append(n)
-        offsets.append(float(n @ mesh.vertices[mesh.faces[k, 0]]))
-    return np.asarray(normals, dtype=float).reshape(-1, 3), np.asarray(offsets, dtype=float)
 
 
 @dataclass(frozen=True)
@@ -525,15 +540,12 @@ def check_faces(
 
 
 def _faces_one(
-    job: tuple[Path, dict[str, str], trimesh.Trimesh, tk_settings.Settings | None],
+    job: tuple[Path, dict[str, str], trimesh.Trimesh, tk_settings.Settings | None, tuple[str, ...]],
 ) -> tuple[dict[str, str], FaceCheck | str]:
-    folder, row, solid, chosen = job
-    path = folder / record_name(
-        row["explorer"], row["group"], row["name"], row["rules"], float(row["noise"])
-    )
+    folder, row, solid, chosen, truth = job
     try:
         with _using(chosen):
-            model = classify_record(ExplorationRecord.load(path), rules=row["rules"]).model
+            model = classify_record(_record(folder, row, solid, truth), rules=row["rules"]).model
     except Exception as exc:  # a benchmark reports failures, it does not stop on them
         return row, f"{type(exc).__name__}: {exc}"[:200]
     kept = [f for f in model.faces if f.source != "assumed"]
@@ -557,20 +569,17 @@ def _z_columns(checks: list[FaceCheck]) -> str:
     return f"{z50:5.1f} {z90:5.1f}"
 
 
-def faces_report(
-    folder: Path,
-    draw: int,
-    instances: int,
-    seeds: int,
-    workers: int,
-    chosen: tk_settings.Settings | None = None,
-) -> None:
-    """Compare the model of every record in ``folder`` (saved with ``--records``) with the
-    solid it was explored on: per group, the cases whose model has extra, missing or tilted
-    faces, is concave or open; then every wrong answer's model. The solids are made again
-    from ``draw``, ``instances`` and ``seeds``, which must be those of the run."""
-    index = folder / INDEX
-    rows = read_index(folder)
+def _case(row: dict[str, str]) -> tuple[str, str, str, str, float]:
+    """The key of a case: explorer, group, name, rules and noise."""
+    return (row["explorer"], row["group"], row["name"], row["rules"], float(row["noise"]))
+
+
+def solids_of(
+    folder: Path, rows: list[dict[str, str]], draw: int, instances: int, seeds: int
+) -> dict[tuple[str, str, str, str, float], trimesh.Trimesh]:
+    """The ideal solid of each case of ``rows`` (the real objects have none), made again from
+    ``draw``, ``instances`` and ``seeds``, which must be those of the run that saved them in
+    ``folder``; one line naming the index when a case is not one of them."""
     levels = sorted({int(r["group"].split()[1]) for r in rows if r["group"].startswith("level ")})
     families = {r["name"].split(":", 1)[0] for r in rows if r["group"] != "real"}
     explorers = sorted({r["explorer"] for r in rows})
@@ -579,19 +588,38 @@ def faces_report(
         (j.explorer, j.group, j.name, j.rules, j.noise): j.ideal if j.ideal is not None else j.mesh
         for j in made
     }
-    # a curved solid's tessellation is no set of faces to find
-    curved = {j.name for j in made if j.rules == "polyhedra" and j.label == "curved"}
-    todo = []
     for r in rows:
-        if r["group"] == "real" or r["name"] in curved:
-            continue
-        key = (r["explorer"], r["group"], r["name"], r["rules"], float(r["noise"]))
-        if key not in solids:
+        if r["group"] != "real" and _case(r) not in solids:
             raise SystemExit(
-                f"{index}: {r['group']} {r['name']!r} is not a case of --draw {draw} "
+                f"{folder / INDEX}: {r['group']} {r['name']!r} is not a case of --draw {draw} "
                 f"--instances {instances} --seeds {seeds} (give the run's)"
             )
-        todo.append((folder, r, solids[key], chosen))
+    return solids
+
+
+def faces_report(
+    folder: Path,
+    draw: int,
+    instances: int,
+    seeds: int,
+    workers: int,
+    chosen: tk_settings.Settings | None = None,
+    truth: tuple[str, ...] = (),
+) -> None:
+    """Compare the model of every record in ``folder`` (saved with ``--records``) with the
+    solid it was explored on: per group, the cases whose model has extra, missing or tilted
+    faces, is concave or open; then every wrong answer's model. The solids are made again
+    from ``draw``, ``instances`` and ``seeds``, which must be those of the run. With
+    ``truth``, the records get it first (:mod:`truth`)."""
+    rows = read_index(folder)
+    solids = solids_of(folder, rows, draw, instances, seeds)
+    # a curved solid's tessellation is no set of faces to find
+    curved = {r["name"] for r in rows if r["rules"] == "polyhedra" and r["label"] == "curved"}
+    todo = [
+        (folder, r, solids[_case(r)], chosen, truth)
+        for r in rows
+        if r["group"] != "real" and r["name"] not in curved
+    ]
     if workers > 1:
         with multiprocessing.get_context("fork").Pool(workers) as pool:
             done = list(pool.imap(_faces_one, todo, 4))
@@ -679,6 +707,14 @@ def main(argv: list[str] | None = None) -> None:
         "must be the run's): extra, missing and tilted faces, per group and per wrong answer",
     )
     ap.add_argument(
+        "--truth",
+        metavar="ITEMS",
+        help="with --rejudge or --faces: first put the solid's truth into each record, "
+        "comma-separated from roundings (drop the touches of rounded edges), readings (the "
+        "sensors an ideal face fires) and centres (tip centres ρ from the ideal surface); the "
+        "solids are made again from --draw, --instances and --seeds, which must be the run's",
+    )
+    ap.add_argument(
         "--settings",
         type=Path,
         metavar="FILE.toml",
@@ -693,6 +729,9 @@ def main(argv: list[str] | None = None) -> None:
     )
     args = ap.parse_args(argv if argv is not None else [])
     chosen = chosen_settings(args)
+    truth = parse_items(args.truth) if args.truth is not None else ()
+    if truth and not (args.rejudge or args.faces):
+        raise SystemExit(f"--truth {args.truth}: give --rejudge DIR or --faces DIR with it")
     if not args.summarize:  # a log's figures were measured with what wrote it
         print(versions_line(), flush=True)
         if chosen is not None:
@@ -701,13 +740,18 @@ def main(argv: list[str] | None = None) -> None:
             ]
             print("settings: " + " ".join(given), flush=True)
     if args.faces:
-        faces_report(args.faces, args.draw, args.instances, args.seeds, args.workers, chosen)
+        faces_report(args.faces, args.draw, args.instances, args.seeds, args.workers, chosen, truth)
         return
     if args.summarize:
         summary(read_log(args.summarize))
         return
     if args.rejudge:
-        rejudge(args.rejudge, args.workers, chosen)
+        solids = (
+            solids_of(args.rejudge, read_index(args.rejudge), args.draw, args.instances, args.seeds)
+            if truth
+            else None
+        )
+        rejudge(args.rejudge, args.workers, chosen, truth, solids)
         return
     known = available_explorers()
     explorers = args.explorer or [e for e in ("stepper", "mujoco") if e in known]

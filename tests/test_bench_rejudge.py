@@ -281,3 +281,46 @@ def test_a_record_that_cannot_be_read_is_named_not_fatal(
     assert f"  [ideal] {row['name']}: RecordError: " in out
     rows = _table_rows(out)
     assert rows["ideal"][:2] == ["3", "3"]  # the other three ideal models, every face right
+
+
+def test_the_solids_truth_is_put_into_the_records_rejudged(
+    saved: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    bench_real.main(["--rejudge", str(saved), "--workers", "1", "--truth", "centres,readings"])
+    out = capsys.readouterr().out
+    assert "truth: readings, centres put into 8 records\n" in out
+    # the ideal cube's touches read and lie as an ideal face's: every answer stays right
+    assert "stepper  ideal    right 4/4 when explored, 4/4 now" in out
+    assert "stepper  level 1  right " in out
+    assert "8 records classified again" in out
+
+
+def test_the_faces_are_matched_with_the_truth_put_in(
+    saved: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    bench_real.main(["--faces", str(saved), "--workers", "1", "--truth", "roundings"])
+    rows = _table_rows(capsys.readouterr().out)
+    assert rows["ideal"][:9] == ["4", "4", "0", "0", "0", "0", "0", "0", "0"]
+    assert rows["level"][:2] == ["1", "4"]
+
+
+@pytest.mark.parametrize(
+    ("given", "message"),
+    [
+        (["--truth", "readings"], "--truth readings: give --rejudge DIR or --faces DIR with it"),
+        (["--truth", "bumps"], "--truth bumps: no item 'bumps' (choose from roundings, readings"),
+    ],
+)
+def test_a_bad_truth_is_refused_in_one_line(given: list[str], message: str) -> None:
+    with pytest.raises(SystemExit) as err:
+        bench_real.main(given)
+    assert str(err.value).startswith(message)
+    assert "\n" not in str(err.value)
+
+
+def test_truth_from_another_draw_is_refused_in_one_line(saved: Path) -> None:
+    with pytest.raises(SystemExit) as err:
+        bench_real.main(["--rejudge", str(saved), "--draw", "5", "--truth", "readings"])
+    msg = str(err.value)
+    assert msg.startswith(f"{saved / 'index.csv'}: ")
+    assert "is not a case of --draw 5 --instances 1 --seeds 1 (give the run's)" in msg
