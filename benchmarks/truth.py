@@ -36,7 +36,7 @@ import trimesh
 from tactile_kb.geometry.planes import nearest_points
 from tactile_kb.perturb import LEVELS, SHARP_DEG, _has_sharp_edges, sharp_edge_length
 from tactile_kb.record import Contact, ExplorationRecord
-from tactile_kb.touch.finger import Orientation, builtin_finger
+from tactile_kb.touch.finger import BUILTIN_LAYOUTS, Finger, Orientation, builtin_finger
 
 ITEMS = ("roundings", "readings", "centres")
 """What ``--truth`` can take away, in the order it is applied."""
@@ -113,22 +113,27 @@ def _surface_normals(centres: np.ndarray, ideal: trimesh.Trimesh) -> tuple[np.nd
     return np.asarray(closest, dtype=float), np.asarray(ideal.face_normals[triangle], dtype=float)
 
 
-def _ideal_reading(
-    contact: Contact, normal: np.ndarray, layout: np.ndarray, cos_cone: float
-) -> dict[str, object]:
+def _ideal_reading(contact: Contact, normal: np.ndarray, finger: Finger) -> dict[str, object]:
     """The fields of ``contact`` an ideal face of outward ``normal`` would give: the sensor
-    nearest to ``-normal`` (in the world, the head at the contact's orientation), its
-    direction and the sensors whose cones hold ``-normal``."""
-    world = layout @ Orientation(*contact.orientation).rotation.T
-    cos = world @ -normal
-    best = int(np.argmax(cos))
-    fired = tuple(int(k) for k in np.flatnonzero(cos >= cos_cone - 1e-12)) or (best,)
-    d = world[best]
+    of ``finger`` nearest to ``-normal`` (the head at the contact's orientation), its world
+    direction and the sensors whose cones hold ``-normal`` (:meth:`Finger.fired`)."""
+    turn = Orientation(*contact.orientation).rotation
+    inward = turn.T @ -normal  # in the finger's frame
+    best = int(np.argmax(finger.matrix @ inward))
+    d = turn @ finger.matrix[best]
     return {
         "sensor": best,
-        "sensors": fired,
+        "sensors": finger.fired([inward]) or (best,),
         "direction": (float(d[0]), float(d[1]), float(d[2])),
     }
+
+
+def _finger_of(record: ExplorationRecord) -> Finger:
+    """The finger a record was explored with: the built-in layout it names, else its sensor
+    directions with cones so narrow that only the nearest sensor is on."""
+    if record.finger in BUILTIN_LAYOUTS:
+        return builtin_finger(record.finger)
+    return Finger(name=record.finger, directions=tuple(record.sensor_directions), cone_deg=1e-6)
 
 
 def corrected(
@@ -145,14 +150,12 @@ def corrected(
     contacts = list(record.contacts)
     if "readings" in items or "centres" in items:
         closest, normals = _surface_normals(centres, ideal)
-        finger = builtin_finger(record.finger) if record.finger in ("4", "33") else None
-        layout = np.asarray(record.sensor_directions, dtype=float)
-        cos_cone = finger.cos_cone if finger is not None else 1.0
+        finger = _finger_of(record) if record.sensor_directions else None
         for i in np.flatnonzero(~rounded):
             update: dict[str, object] = {}
             n = normals[i]
-            if "readings" in items and len(layout):
-                update.update(_ideal_reading(contacts[i], n, layout, cos_cone))
+            if "readings" in items and finger is not None:
+                update.update(_ideal_reading(contacts[i], n, finger))
             centre = centres[i]
             if "centres" in items:
                 centre = centre - (float((centre - closest[i]) @ n) - rho) * n
