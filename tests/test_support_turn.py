@@ -11,6 +11,7 @@ of ``benchmarks/bench_poses.py`` (seed 1) that went wrong.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import numpy as np
@@ -61,6 +62,25 @@ def test_under_noise_a_face_known_from_its_sensors_may_turn_by_their_uncertainty
     assert supporting == [True, True]
     # exact touches keep the strict test: the face is left out of the envelope
     _, _, _, supporting = _support(c, RHO, tuple(faces), 0.003, 0.0)
+    assert supporting == [True, False]
+
+
+def test_exact_touches_of_a_scan_may_turn_a_face_as_noisy_ones_do() -> None:
+    # no declared noise, but the top's six tip centres scatter by 0.4 mm about its plane (a
+    # scan's bumps and relief, far beyond SMOOTH_RHO ρ = 0.05 mm): the faces are fitted to a
+    # rough surface, not exact planes, and the side may turn as under noise
+    faces, c = _tilted_side(12.0, 12.95, refined=False)
+    scan = [dataclasses.replace(faces[0], residual=0.0004), faces[1]]
+    _, _, _, supporting = _support(c, RHO, tuple(scan), 0.003, 0.0)
+    assert supporting == [True, True]
+    # scatter within SMOOTH_RHO ρ is an ideal surface's: the strict test
+    ideal = [dataclasses.replace(faces[0], residual=0.00004), faces[1]]
+    _, _, _, supporting = _support(c, RHO, tuple(ideal), 0.003, 0.0)
+    assert supporting == [True, False]
+    # and the strict test's bound stays where a well-fitted face is concave
+    fitted, c = _tilted_side(12.0, 0.2, refined=True)
+    rough = [dataclasses.replace(fitted[0], residual=0.0004), fitted[1]]
+    _, _, _, supporting = _support(c, RHO, tuple(rough), 0.003, 0.0)
     assert supporting == [True, False]
 
 

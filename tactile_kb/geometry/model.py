@@ -47,6 +47,7 @@ import numpy as np
 
 from tactile_kb.errors import GeometryError, OpenModelError, UsageError
 from tactile_kb.geometry.planes import (
+    SMOOTH_RHO,
     Face,
     contact_arrays,
     edge_faces,
@@ -54,6 +55,7 @@ from tactile_kb.geometry.planes import (
     merge_plane_arrays,
     nearest_points,
     refit_past_roundings,
+    surface_detail,
 )
 from tactile_kb.geometry.polyhedron import (
     Polyhedron,
@@ -484,10 +486,14 @@ def _support(
     lies beyond the plane by up to ``d · tan(3σ)`` (or ``d · tan(cone)``) more (at most 45°; an
     undercut face of a lying frustum touched along one line, its quantised normal 5.6° off,
     put a tip 133 mm away 10 mm beyond it, and the frustum was taken for a concave object);
-    not so a face of one or two touches, which is no row to turn a plane about. Exact
-    touches keep the strict test: there the other faces' planes are exact, and a face
-    an exact touch lies beyond is left out of the envelope rather than let in turned (let
-    in, two faces of a 3.3 cm icosahedron fitted as one turned five exact models curved)."""
+    not so a face of one or two touches, which is no row to turn a plane about. The same
+    holds for exact touches of a scan (its faces scatter by more than
+    :data:`~tactile_kb.geometry.planes.SMOOTH_RHO` ρ,
+    :func:`~tactile_kb.geometry.planes.surface_detail`): fitted to bumps and roundings, its
+    planes are no more exact than noisy ones. Exact touches of an ideal surface keep the
+    strict test: there the other faces' planes are exact, and a face an exact touch lies
+    beyond is left out of the envelope rather than let in turned (let in, two faces of a
+    3.3 cm icosahedron fitted as one turned five exact models curved)."""
     points = _surface_points(centres, rho, faces)
     normals = np.asarray([f.normal for f in faces], dtype=float).reshape(-1, 3)
     offsets = np.asarray([f.offset for f in faces], dtype=float)
@@ -496,7 +502,9 @@ def _support(
         c = centres[touched]
         beyond = c @ normals.T - offsets - rho
         allowed = np.full(beyond.shape, tol)
-        for k, f in enumerate(faces if noise > 0 else ()):
+        # a scan's faces (detail beyond SMOOTH_RHO ρ) are no exact planes either
+        inexact = noise > 0 or surface_detail(faces) > SMOOTH_RHO * rho
+        for k, f in enumerate(faces if inexact else ()):
             if len(f.contacts) < 3:
                 continue  # one or two touches are no row to turn a plane about
             own = centres[list(f.contacts)]
