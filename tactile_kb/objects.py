@@ -3,7 +3,8 @@
 :func:`load_object` reads a mesh in metres with trimesh, validates it (readable, not empty,
 a solid, one object, fits the workspace), cleans it (floating specks dropped, holes filled)
 and rests it on the table: the lowest
-point is moved to z = 0, the orientation and the x–y position are kept. Every problem is one
+point is moved to z = 0, the orientation and the x–y position are kept (a mesh that lies
+outside the workspace, a scan in its scanner's coordinates, is first centred over the origin). Every problem is one
 :class:`~tactile_kb.errors.ObjectError` line naming the file. The input mesh is never modified:
 the result is a copy.
 
@@ -186,12 +187,16 @@ def load_object(obj: ObjectLike, *, name: str | None = None) -> trimesh.Trimesh:
     ObjectError
         Unreadable file, empty mesh, non-finite coordinates, more than one object (bodies
         neither parts of the largest one nor floating specks, :func:`_one_object`), not a solid (a plane, a line, a
-        point set: no volume or thinner than :data:`MIN_SIZE`), or larger than the workspace.
+        point set: no volume or thinner than :data:`MIN_SIZE`), or larger than the workspace
+        (even centred on it).
         The tip's own limit is :func:`check_thickness`.
 
     Seams closer than ``objects.weld_fraction`` of the size are welded, specks are dropped and
     holes filled (``trimesh.repair.fill_holes``); a mesh trimesh cannot
     close is explored as it is. Each such change is listed in ``mesh.metadata[NOTES_KEY]``.
+    A mesh that reaches beyond the workspace in x or y (a scan in its scanner's coordinates)
+    is centred over the origin; the shifts are ``mesh.metadata["moved_xy"]`` and
+    ``mesh.metadata["moved_z"]``, and the explorers report them in the record's notes.
     """
     label = name or object_name(obj)
     if isinstance(obj, str | Path):
@@ -242,14 +247,19 @@ def load_object(obj: ObjectLike, *, name: str | None = None) -> trimesh.Trimesh:
             f"(at most {current().objects.max_size:g} m){_units_hint(extent, units)}"
         )
     lo, hi = mesh.bounds
-    if (
-        max(abs(float(lo[0])), abs(float(lo[1])), abs(float(hi[0])), abs(float(hi[1])))
-        > current().objects.workspace_half_width
-    ):
-        raise ObjectError(
-            f"{label}: lies outside the workspace (|x|, |y| ≤ {current().objects.workspace_half_width:g} m); "
-            "move it near the origin"
-        )
+    half = current().objects.workspace_half_width
+    moved_xy = (0.0, 0.0)
+    if max(abs(float(lo[0])), abs(float(lo[1])), abs(float(hi[0])), abs(float(hi[1]))) > half:
+        # a scan in its scanner's coordinates: its bounding box centred over the origin (the
+        # size check above leaves it within the workspace there)
+        moved_xy = (-0.5 * float(lo[0] + hi[0]), -0.5 * float(lo[1] + hi[1]))
+        mesh.apply_translation((moved_xy[0], moved_xy[1], 0.0))
+        lo, hi = mesh.bounds
+        if max(abs(float(lo[0])), abs(float(lo[1])), abs(float(hi[0])), abs(float(hi[1]))) > half:
+            raise ObjectError(
+                f"{label}: does not fit the workspace (|x|, |y| ≤ {half:g} m) even centred "
+                f"on it: {float(hi[0] - lo[0]):.3g} × {float(hi[1] - lo[1]):.3g} m"
+            )
     if mesh.is_watertight and signed < 0:  # (solid is mesh)
         mesh.invert()
     if current().objects.rest == "stable":
@@ -257,6 +267,7 @@ def load_object(obj: ObjectLike, *, name: str | None = None) -> trimesh.Trimesh:
         lo, _ = mesh.bounds
     mesh.apply_translation((0.0, 0.0, -float(lo[2])))
     mesh.metadata["moved_z"] = -float(lo[2])  # reported in the exploration's notes
+    mesh.metadata["moved_xy"] = moved_xy  # so is this
     mesh.metadata["name"] = label
     mesh.metadata[NOTES_KEY] = notes
     return mesh

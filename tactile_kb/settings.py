@@ -641,7 +641,7 @@ class ObjectSettings(_Group):
         0.5,
         gt=0,
         description="Metres: every point of the object must lie within this distance of the z "
-        "axis in x and y.",
+        "axis in x and y; an object that does not is first centred over the origin.",
     )
     units: Literal["m", "cm", "mm", "in"] = Field(
         "m",

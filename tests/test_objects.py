@@ -141,7 +141,7 @@ def test_degenerate_mesh() -> None:
         load_object(flat)
 
 
-def test_too_large_and_outside_the_workspace() -> None:
+def test_too_large_for_the_workspace() -> None:
     big = trimesh.creation.box((MAX_SIZE * 2, 0.05, 0.05))
     with pytest.raises(ObjectError) as refused:
         load_object(big)
@@ -149,10 +149,41 @@ def test_too_large_and_outside_the_workspace() -> None:
     assert str(refused.value).endswith(
         f"larger than the workspace: {MAX_SIZE * 2:.3g} m across (at most {MAX_SIZE:g} m)"
     )
-    far = trimesh.creation.box((0.05, 0.05, 0.05))
-    far.apply_translation((3.0, 0.0, 0.0))
-    with pytest.raises(ObjectError, match="outside the workspace"):
-        load_object(far)
+
+
+def test_an_object_outside_the_workspace_is_centred_over_the_origin() -> None:
+    # a scan in its scanner's coordinates: 3 m along x, 0.8 m along −y, 1 m up
+    far = trimesh.creation.box((0.08, 0.05, 0.04))
+    far.apply_translation((3.0, -0.8, 1.0))
+    obj = load_object(far)
+    assert np.allclose(obj.bounds, [[-0.04, -0.025, 0.0], [0.04, 0.025, 0.04]])
+    assert np.allclose(obj.metadata["moved_xy"], (-3.0, 0.8))
+    assert obj.metadata["moved_z"] == pytest.approx(-0.98)
+    assert np.allclose(far.bounds[0], [2.96, -0.825, 0.98])  # the input is not modified
+    # within the workspace, x and y are kept
+    near = trimesh.creation.box((0.08, 0.05, 0.04))
+    near.apply_translation((0.3, -0.2, 0.0))
+    kept = load_object(near)
+    assert np.allclose(kept.bounds[:, :2], near.bounds[:, :2])
+    assert kept.metadata["moved_xy"] == (0.0, 0.0)
+    # a workspace too narrow for the object even centred on it: one line naming it
+    narrow = settings.override(objects={"workspace_half_width": 0.03})
+    with narrow, pytest.raises(ObjectError) as refused:
+        load_object(far, name="far.stl")
+    assert str(refused.value) == (
+        "far.stl: does not fit the workspace (|x|, |y| ≤ 0.03 m) even centred on it: 0.08 × 0.05 m"
+    )
+
+
+def test_the_record_says_how_far_the_object_was_moved() -> None:
+    far = trimesh.creation.box((0.06, 0.06, 0.06))
+    far.apply_translation((-2.0, 1.5, 0.03))
+    record = StepperExplorer().explore(far, finger="4")
+    assert (
+        "the mesh was moved (+2000, -1500) mm along x and y so that it lies in the workspace"
+        in (" ".join(record.notes))
+    )
+    assert record.contacts
 
 
 def test_not_a_mesh() -> None:

@@ -259,6 +259,12 @@ class WorldExplorer(abc.ABC):
         mesh = load_object(obj)
         check_thickness(mesh, f.radius, name=object_name(obj))
         notes = []
+        dx, dy = mesh.metadata.get("moved_xy", (0.0, 0.0))
+        if abs(dx) > 1e-6 or abs(dy) > 1e-6:
+            notes.append(
+                f"the mesh was moved ({dx * 1000:+.4g}, {dy * 1000:+.4g}) mm along x and y so "
+                "that it lies in the workspace (its bounding box centred over the origin)"
+            )
         moved = float(mesh.metadata.get("moved_z", 0.0))
         if abs(moved) > 1e-6:
             notes.append(
