@@ -4,8 +4,8 @@
 a solid, one object, fits the workspace), cleans it (floating specks dropped, holes filled)
 and rests it on the table: the lowest
 point is moved to z = 0, the orientation and the x–y position are kept (a mesh that lies
-outside the workspace, a scan in its scanner's coordinates, is first centred over the origin). Every problem is one
-:class:`~tactile_kb.errors.ObjectError` line naming the file. The input mesh is never modified:
+outside the workspace, a scan in its scanner's coordinates, is first centred over the
+origin). Every problem is one :class:`~tactile_kb.errors.ObjectError` line naming the file. The input mesh is never modified:
 the result is a copy.
 
 Examples
@@ -246,16 +246,16 @@ def load_object(obj: ObjectLike, *, name: str | None = None) -> trimesh.Trimesh:
             f"{label}: larger than the workspace: {float(extent.max()):.3g} m across "
             f"(at most {current().objects.max_size:g} m){_units_hint(extent, units)}"
         )
-    lo, hi = mesh.bounds
     half = current().objects.workspace_half_width
     moved_xy = (0.0, 0.0)
-    if max(abs(float(lo[0])), abs(float(lo[1])), abs(float(hi[0])), abs(float(hi[1]))) > half:
-        # a scan in its scanner's coordinates: its bounding box centred over the origin (the
-        # size check above leaves it within the workspace there)
+    if _reach_xy(mesh) > half:
+        # a scan in its scanner's coordinates: its bounding box centred over the origin, where
+        # it fits unless the workspace is set narrower than objects.max_size
+        lo, hi = mesh.bounds
         moved_xy = (-0.5 * float(lo[0] + hi[0]), -0.5 * float(lo[1] + hi[1]))
         mesh.apply_translation((moved_xy[0], moved_xy[1], 0.0))
-        lo, hi = mesh.bounds
-        if max(abs(float(lo[0])), abs(float(lo[1])), abs(float(hi[0])), abs(float(hi[1]))) > half:
+        if _reach_xy(mesh) > half:
+            lo, hi = mesh.bounds
             raise ObjectError(
                 f"{label}: does not fit the workspace (|x|, |y| ≤ {half:g} m) even centred "
                 f"on it: {float(hi[0] - lo[0]):.3g} × {float(hi[1] - lo[1]):.3g} m"
@@ -264,13 +264,19 @@ def load_object(obj: ObjectLike, *, name: str | None = None) -> trimesh.Trimesh:
         mesh.invert()
     if current().objects.rest == "stable":
         mesh = _rest_stable(mesh, solid, notes)
-        lo, _ = mesh.bounds
+    lo, _ = mesh.bounds
     mesh.apply_translation((0.0, 0.0, -float(lo[2])))
     mesh.metadata["moved_z"] = -float(lo[2])  # reported in the exploration's notes
     mesh.metadata["moved_xy"] = moved_xy  # so is this
     mesh.metadata["name"] = label
     mesh.metadata[NOTES_KEY] = notes
     return mesh
+
+
+def _reach_xy(mesh: trimesh.Trimesh) -> float:
+    """How far (m) the mesh reaches from the z axis along x or y: the largest |x| or |y| of
+    its bounding box."""
+    return float(np.abs(np.asarray(mesh.bounds, dtype=float)[:, :2]).max())
 
 
 UNITS: dict[str, float] = {"m": 1.0, "cm": 0.01, "mm": 0.001, "in": 0.0254}
