@@ -2,11 +2,11 @@
 
 :func:`load_object` reads a mesh in metres with trimesh, validates it (readable, not empty,
 a solid, one object, fits the workspace), cleans it (floating specks dropped, holes filled)
-and rests it on the table: the lowest
-point is moved to z = 0, the orientation and the x–y position are kept (a mesh that lies
-outside the workspace, a scan in its scanner's coordinates, is first centred over the
-origin). Every problem is one :class:`~tactile_kb.errors.ObjectError` line naming the file. The input mesh is never modified:
-the result is a copy.
+and rests it on the table: the lowest point is moved to z = 0, the orientation and the x–y
+position are kept (a mesh that lies outside the workspace, a scan in its scanner's
+coordinates, is first centred over the origin). Every problem is one
+:class:`~tactile_kb.errors.ObjectError` line naming the file. The input mesh is never
+modified: the result is a copy.
 
 Examples
 --------
@@ -267,7 +267,7 @@ def load_object(obj: ObjectLike, *, name: str | None = None) -> trimesh.Trimesh:
     lo, _ = mesh.bounds
     mesh.apply_translation((0.0, 0.0, -float(lo[2])))
     mesh.metadata["moved_z"] = -float(lo[2])  # reported in the exploration's notes
-    mesh.metadata["moved_xy"] = moved_xy  # so is this
+    mesh.metadata["moved_xy"] = moved_xy  # reported in the notes too
     mesh.metadata["name"] = label
     mesh.metadata[NOTES_KEY] = notes
     return mesh
