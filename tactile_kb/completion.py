@@ -1522,7 +1522,7 @@ class ModelCompleter:
         key = record.model_dump_json(include=_MODEL_INPUTS)
         if self._last is not None and self._last[0] == key:
             return dataclasses.replace(self._last[1], record=record)
-        model = build_model(record)
+        model = build_model(record, rounded=False)
         self._last = (key, model)
         return model
 

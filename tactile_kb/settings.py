@@ -328,6 +328,20 @@ class GeometrySettings(_Group):
         description="Fraction: real edges are rounded with a radius up to this fraction of the "
         "narrower of the two faces they join.",
     )
+    rounded_fit_sigmas: float = Field(
+        2.5,
+        ge=0,
+        description="When positive, a face the rounded envelope of the other faces explains "
+        "(its touches within this many robust σ of it and on average within 2 σ/√m, mostly on "
+        "an edge's or a corner's rounding) is dropped (tactile_kb.geometry.rounded); 0 keeps "
+        "every face.",
+    )
+    rounded_min_width: float = Field(
+        2.0,
+        ge=0,
+        description="Tip radii: the rounded envelope explains a face only by faces at least this "
+        "wide (a curved object's narrow facets stay).",
+    )
     edge_min_width: float = Field(
         4.0,
         gt=0,

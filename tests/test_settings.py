@@ -64,6 +64,8 @@ DOCUMENTED: dict[str, dict[str, float | str]] = {
         "robust_rho": 0.02,
         "max_refine_deg": 35.0,
         "edge_rounding": 0.10,
+        "rounded_fit_sigmas": 2.5,
+        "rounded_min_width": 2.0,
         "edge_min_width": 4.0,
         "edge_sigmas": 2.0,
         "relief_rho": 0.2,

@@ -63,6 +63,7 @@ from tactile_kb.geometry.polyhedron import (
     face_width,
     polyhedron_from_planes,
 )
+from tactile_kb.geometry.rounded import unexplained
 from tactile_kb.geometry.sections import LayerSection, distinct_planes, layer_sections
 from tactile_kb.record import ExplorationRecord
 from tactile_kb.settings import DEFAULTS, current
@@ -110,6 +111,10 @@ face known from its sensors alone turns by their quantisation cone, a bound): a 
 hexagonal disc's bulged scan top fitted a patch of 11 touches 9.3° off (2σ of its 4.6°), and
 at 1σ the touches 19–20 cm away on the rest of the top lay beyond it, so the disc was not
 convex."""
+
+ROUNDED_MAX_FACES = 14
+"""More faces than this (a curved object's facets) are not examined against the rounded
+envelope (:func:`_rounded_drop`)."""
 
 T = TypeVar("T")
 
@@ -186,6 +191,7 @@ def build_model(
     assume_top: bool = False,
     collapse_sigmas: float | Literal["settings"] | None = "settings",
     edge_rounding: float | Literal["settings"] | None = "settings",
+    rounded: bool = True,
 ) -> ObjectModel:
     """Build the :class:`ObjectModel` of ``record``.
 
@@ -227,6 +233,12 @@ def build_model(
         that rolled onto a rounded edge beside it turn its plane is refitted without them
         (:func:`tactile_kb.geometry.planes.refit_past_roundings`). None keeps every face as
         fitted; ``"settings"``: the settings' ``geometry.edge_rounding``.
+    rounded
+        After those, drop the faces the rounded envelope of the others explains
+        (:func:`tactile_kb.geometry.rounded.unexplained`, when ``geometry.rounded_fit_sigmas``
+        is positive and ``edge_rounding`` is not None); their contacts join
+        ``options["edge_contacts"]``. The completion's models in the exploration loop leave it
+        out (False): it costs a fit per face, and only the final model is classified.
 
     Returns
     -------
@@ -291,6 +303,21 @@ def build_model(
         )
         if refitted != faces:
             faces = refitted
+            points, normals, offsets, supporting = _support(
+                arrays[0], record.tip_radius, faces, tol, noise
+            )
+    if (
+        rounded
+        and edge_rounding is not None
+        and geo.rounded_fit_sigmas > 0
+        and 5 <= len(faces) <= ROUNDED_MAX_FACES
+    ):
+        drop = _rounded_drop(faces, supporting, arrays[0], record.tip_radius, noise, edge_rounding)
+        if drop:
+            edge_contacts = tuple(
+                sorted((*edge_contacts, *(i for k in drop for i in faces[k].contacts)))
+            )
+            faces = tuple(f for k, f in enumerate(faces) if k not in drop)
             points, normals, offsets, supporting = _support(
                 arrays[0], record.tip_radius, faces, tol, noise
             )
@@ -468,6 +495,41 @@ def _sensed(record: ExplorationRecord, directions: FloatArray) -> FloatArray:
     slide = np.asarray([c.kind != "touch" for c in record.contacts], dtype=bool)
     out[slide] = np.nan
     return out
+
+
+def _rounded_drop(
+    faces: tuple[Face, ...],
+    supporting: list[bool],
+    centres: FloatArray,
+    rho: float,
+    noise: float,
+    rounding: float,
+) -> list[int]:
+    """The supporting faces the rounded envelope of the others explains
+    (:func:`tactile_kb.geometry.rounded.unexplained`; the robust scale at least the declared
+    noise and :data:`~tactile_kb.geometry.planes.SMOOTH_RHO` ρ)."""
+    js = [k for k, s in enumerate(supporting) if s]
+    if len(js) < 5:
+        return []
+    normals = np.asarray([faces[k].normal for k in js], dtype=float)
+    offsets = np.asarray([faces[k].offset for k in js], dtype=float) + rho
+    fixed = [faces[k].source != "contacts" for k in js]
+    groups = [list(faces[k].contacts) for k in js]
+    cand = [p for p, k in enumerate(js) if faces[k].source == "contacts" and faces[k].contacts]
+    removed, _ = unexplained(
+        centres,
+        groups,
+        normals,
+        offsets,
+        rho,
+        fixed=fixed,
+        candidates=cand,
+        rounding=rounding,
+        floor=max(noise, SMOOTH_RHO * rho),
+        sigmas=current().geometry.rounded_fit_sigmas,
+        min_width=current().geometry.rounded_min_width * rho,
+    )
+    return sorted(js[p] for p in removed)
 
 
 def _support(

@@ -1,0 +1,421 @@
+"""The rounded envelope: one convex polyhedron, its edges rounded, fitted to all the tip centres.
+
+A real object's edges are rounded. A tip of radius ρ sliding over an object ``K ⊕ B(r)``
+(a convex polyhedron ``K`` grown by a ball of radius ``r``: every edge a cylinder of radius
+``r``) keeps its centre on ``K ⊕ B(ρ + r)``: at distance ``R = ρ + r`` from ``K``, whether it
+touches a face, the rounding of an edge or that of a corner. A sharp solid is the case
+``r = 0``. Fitted face by face, the touches of the roundings either make faces of their own
+(a plane through a rounding's touches, its normal between two faces') or, kept with a face,
+turn its plane by degrees: the faces' planes and the roundings are one model, and are
+fitted as one here.
+
+:func:`fit_rounded` fits the planes of ``K`` and the shared radius ``r`` to the tip centres
+by a robust least-squares fit (scipy's ``least_squares`` with the ``soft_l1`` loss, an
+M-estimator): each centre's residual is its distance from ``K`` less ``R``, measured to the
+nearest face, edge or corner of ``K`` (re-assigned between rounds). :func:`unexplained`
+then asks of each face in turn whether the model *without* it explains its touches as well
+as with it: a rounding's face does (its touches lie on the rounding of the edge its two
+neighbours make), a face of the object does not (without it ``K`` overshoots: a corner
+that is not there, its touches inside the model by that corner's depth).
+
+Only faces that support the object (no touch beyond them: a convex object's faces) make
+``K``; a non-convex object's hollows are left to :mod:`tactile_kb.geometry.blocks`.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import NDArray
+from scipy.optimize import least_squares
+
+from tactile_kb.errors import GeometryError
+from tactile_kb.geometry.polyhedron import Polyhedron, face_width, polyhedron_from_planes
+from tactile_kb.types import FloatArray
+
+__all__ = ["RoundedFit", "fit_rounded", "unexplained"]
+
+ROUNDS = 4
+"""Rounds of :func:`fit_rounded`: each fits with the centres' features fixed, then assigns
+them anew (a centre that moved from a face to an edge's rounding)."""
+
+PREFILTER = 2.0
+"""A face is refitted without only when its touches lie within this many times the
+``sigmas`` limit of :func:`unexplained` of the envelope fitted with it, that face's plane left
+out (no refit): a face of the object lies far inside, by the corner it cuts off."""
+
+MAX_EVALUATIONS = 30
+"""Evaluations of the residuals per round of :func:`fit_rounded` (a few Gauss-Newton steps
+from the faces' own planes, a start within a few degrees)."""
+
+FACE, EDGE, CORNER = 0, 1, 2
+
+_Packed = tuple[
+    NDArray[np.intp], NDArray[np.intp], NDArray[np.intp], list[tuple[int, tuple[int, ...]]]
+]
+
+
+def _pack(features: list[tuple[int, tuple[int, ...]]]) -> _Packed:
+    kinds = np.asarray([k for k, _ in features], dtype=np.intp)
+    fi = np.asarray([p[0] for _, p in features], dtype=np.intp)
+    fj = np.asarray([p[1] if k == EDGE else p[0] for k, p in features], dtype=np.intp)
+    corner = [(i, p) for i, (k, p) in enumerate(features) if k == CORNER]
+    return kinds, fi, fj, corner
+
+
+@dataclass(frozen=True)
+class RoundedFit:
+    """A fitted rounded envelope.
+
+    Attributes
+    ----------
+    normals, offsets
+        (m, 3) and (m,): the planes of the tip centres, ``normals · x = offsets`` (``K``'s
+        planes moved out by ``R``); the faces of the object lie ρ inside them.
+    radius
+        ``r``, the edges' rounding radius (m).
+    residuals
+        Per centre, its distance from ``K`` less ``R`` (m; negative inside).
+    scale
+        The robust scale of the residuals (m), 1.4826 × their median absolute value, at least
+        the floor it was fitted with.
+    kinds
+        Per centre, the feature of ``K`` it lies against: ``FACE`` (0), ``EDGE`` (1) or
+        ``CORNER`` (2).
+    planes
+        (n, 2) per centre, the planes of that feature (a face's twice; a corner's first two).
+    """
+
+    normals: FloatArray
+    offsets: FloatArray
+    radius: float
+    residuals: FloatArray
+    scale: float
+    kinds: NDArray[np.intp]
+    planes: NDArray[np.intp]
+
+
+def _tangents(n: FloatArray) -> tuple[FloatArray, FloatArray]:
+    a = np.where(np.abs(n[:, :1]) < 0.9, [[1.0, 0.0, 0.0]], [[0.0, 1.0, 0.0]])
+    u = np.cross(n, a)
+    u /= np.linalg.norm(u, axis=1)[:, None]
+    return u, np.cross(n, u)
+
+
+def _features(
+    c: FloatArray, normals: FloatArray, offsets: FloatArray, bound: tuple[FloatArray, float]
+) -> list[tuple[int, tuple[int, ...]]] | None:
+    """Per centre, the feature of ``K`` (the planes ``normals · x ≤ offsets``) nearest it:
+    ``(FACE, (j,))``, ``(EDGE, (j, k))`` or ``(CORNER, planes)``; None when ``K`` is open."""
+    try:
+        poly = polyhedron_from_planes(normals, offsets, bound=bound)
+    except GeometryError:
+        return None
+    return _nearest_features(c, poly)
+
+
+def _nearest_features(c: FloatArray, poly: Polyhedron) -> list[tuple[int, tuple[int, ...]]]:
+    plane = poly.plane_index
+    best = np.full(len(c), np.inf)
+    out: list[tuple[int, tuple[int, ...]]] = [(FACE, (0,))] * len(c)
+    # faces: the projection inside the polygon
+    for f, loop_ix in enumerate(poly.faces):
+        loop = poly.vertices[list(loop_ix)]
+        n = poly.normals[f]
+        h = c @ n - poly.offsets[f]
+        inward = np.cross(n, np.roll(loop, -1, axis=0) - loop)
+        depth = np.einsum("ijk,jk->ij", c[:, None, :] - loop[None, :, :], inward)
+        inside = (depth >= 0).all(axis=1)
+        d = np.where(inside, np.abs(h), np.inf)
+        better = d < best
+        best[better] = d[better]
+        for i in np.flatnonzero(better):
+            out[i] = (FACE, (int(plane[f]),))
+    # edges, and their ends
+    faces_at: dict[int, set[int]] = {}
+    for (a, b), (f, g) in zip(poly.edges, poly.edge_faces, strict=True):
+        faces_at.setdefault(a, set()).update((int(plane[f]), int(plane[g])))
+        faces_at.setdefault(b, set()).update((int(plane[f]), int(plane[g])))
+    for (a, b), (f, g) in zip(poly.edges, poly.edge_faces, strict=True):
+        p, q = poly.vertices[a], poly.vertices[b]
+        e = q - p
+        t = np.clip((c - p) @ e / max(float(e @ e), 1e-30), 0.0, 1.0)
+        d = np.linalg.norm(c - (p + t[:, None] * e), axis=1)
+        better = d < best - 1e-12
+        best[better] = d[better]
+        for i in np.flatnonzero(better):
+            if 0.0 < t[i] < 1.0:
+                out[i] = (EDGE, (int(plane[f]), int(plane[g])))
+            else:
+                v = a if t[i] <= 0.0 else b
+                out[i] = (CORNER, tuple(sorted(faces_at[v])))
+    # a centre inside K: its nearest face
+    h = c @ poly.normals.T - poly.offsets
+    for i in np.flatnonzero((h < 0).all(axis=1)):
+        out[i] = (FACE, (int(plane[int(np.argmax(h[i]))]),))
+    return out
+
+
+def _residuals(
+    c: FloatArray,
+    normals: FloatArray,
+    offsets: FloatArray,
+    r: float,
+    rho: float,
+    features: _Packed,
+) -> FloatArray:
+    """Each centre's distance from its feature of ``K`` less ``R = ρ + r`` (``K``'s planes are
+    the centres' planes moved in by ``R``)."""
+    big = rho + r
+    d = offsets - big  # K's offsets
+    kinds, fi, fj, corner = features
+    out = np.empty(len(c))
+    if len(fi):
+        sel = kinds == FACE
+        out[sel] = np.einsum("ij,ij->i", c[sel], normals[fi[sel]]) - offsets[fi[sel]]
+        sel = kinds == EDGE
+        if sel.any():
+            nj, nk = normals[fi[sel]], normals[fj[sel]]
+            a = np.einsum("ij,ij->i", c[sel], nj) - d[fi[sel]]
+            b = np.einsum("ij,ij->i", c[sel], nk) - d[fj[sel]]
+            cos = np.einsum("ij,ij->i", nj, nk)
+            sin2 = np.maximum(1.0 - cos * cos, 1e-9)
+            out[sel] = np.sqrt(np.maximum(a * a + b * b - 2.0 * a * b * cos, 0.0) / sin2) - big
+    for i, ix in corner:
+        v, *_ = np.linalg.lstsq(normals[list(ix)], d[list(ix)], rcond=None)
+        out[i] = float(np.linalg.norm(c[i] - v)) - big
+    return out
+
+
+def fit_rounded(
+    centres: FloatArray,
+    normals: FloatArray,
+    offsets: FloatArray,
+    rho: float,
+    *,
+    fixed: Sequence[bool] | NDArray[np.bool_] | None = None,
+    max_radius: float,
+    floor: float,
+    rounds: int = ROUNDS,
+) -> RoundedFit | None:
+    """Fit the rounded envelope to ``centres`` from the tip-centre planes ``normals · x =
+    offsets`` (a start: each face's own fit); planes flagged ``fixed`` (the table) stay.
+    ``r`` lies in ``[0, max_radius]``; ``floor`` (m) is the least scale of the robust loss.
+    None when the planes do not close."""
+    m = len(normals)
+    fixed_a = np.zeros(m, dtype=bool) if fixed is None else np.asarray(fixed, dtype=bool)
+    free = np.flatnonzero(~fixed_a)
+    n0 = np.asarray(normals, dtype=float).copy()
+    e0 = np.asarray(offsets, dtype=float).copy()
+    u, v = _tangents(n0)
+    middle = centres.mean(axis=0)
+    bound = (middle, 3.0 * float(np.linalg.norm(centres - middle, axis=1).max()))
+
+    def unpack(x: FloatArray) -> tuple[FloatArray, FloatArray, float]:
+        n = n0.copy()
+        e = e0.copy()
+        k = len(free)
+        a, b, off = x[:k], x[k : 2 * k], x[2 * k : 3 * k]
+        n[free] = n0[free] + a[:, None] * u[free] + b[:, None] * v[free]
+        n[free] /= np.linalg.norm(n[free], axis=1)[:, None]
+        e[free] = e0[free] + off
+        return n, e, float(x[-1])
+
+    x = np.zeros(3 * len(free) + 1)
+    x[-1] = 0.5 * max_radius
+    scale = floor
+    feats = _features(centres, n0, e0 - rho - x[-1], bound)
+    if feats is None:
+        return None
+    for _ in range(rounds):
+        fs = _pack(feats)
+
+        def fun(y: FloatArray, fs: _Packed = fs) -> FloatArray:
+            n, e, r = unpack(y)
+            return _residuals(centres, n, e, r, rho, fs)
+
+        res0 = fun(x)
+        scale = max(floor, 1.4826 * float(np.median(np.abs(res0))))
+        lo = np.full(len(x), -np.inf)
+        hi = np.full(len(x), np.inf)
+        lo[-1], hi[-1] = 0.0, max(max_radius, 1e-9)
+        x[-1] = min(max(x[-1], 0.0), hi[-1])
+        try:
+            sol = least_squares(
+                fun,
+                x,
+                loss="soft_l1",
+                f_scale=scale,
+                bounds=(lo, hi),
+                max_nfev=MAX_EVALUATIONS,
+                ftol=1e-6,
+                xtol=1e-6,
+            )
+        except np.linalg.LinAlgError:
+            return None
+        x = sol.x
+        n, e, r = unpack(x)
+        new = _features(centres, n, e - rho - r, bound)
+        if new is None:
+            return None
+        if new == feats:
+            break
+        feats = new
+    n, e, r = unpack(x)
+    res = _residuals(centres, n, e, r, rho, _pack(feats))
+    scale = max(floor, 1.4826 * float(np.median(np.abs(res))))
+    kinds, fi, fj, _ = _pack(feats)
+    return RoundedFit(
+        normals=n,
+        offsets=e,
+        radius=r,
+        residuals=res,
+        scale=scale,
+        kinds=kinds,
+        planes=np.column_stack([fi, fj]),
+    )
+
+
+def unexplained(
+    centres: FloatArray,
+    groups: Sequence[Sequence[int]],
+    normals: FloatArray,
+    offsets: FloatArray,
+    rho: float,
+    *,
+    fixed: Sequence[bool],
+    candidates: Sequence[int],
+    rounding: float,
+    floor: float,
+    sigmas: float = 3.5,
+    growth: float = 1.25,
+    min_width: float = 0.0,
+) -> tuple[list[int], RoundedFit | None]:
+    """Which of the ``candidates`` (indices into the planes) the rounded envelope of the other
+    planes explains, removed one at a time (fewest touches first), and the final fit.
+
+    ``groups[j]`` are the indices (into ``centres``) of plane ``j``'s touches. A plane is
+    explained when, fitted without it, every one of its touches lies within ``sigmas`` ×
+    the fit's robust scale of the model, the other touches' robust RMS grows by at most
+    ``growth`` ×, and ``r`` is at most ``rounding`` × the narrowest face's width of ``K``.
+    """
+    keep = list(range(len(normals)))
+    fixed_a = np.asarray(fixed, dtype=bool)
+
+    def radius_cap(planes: list[int]) -> float | None:
+        idx = sorted({i for j in keep for i in groups[j]})
+        poly = _closed(normals[planes], offsets[planes] - rho, centres[idx])
+        if poly is None:
+            return None
+        widths = [face_width(poly, f) for f in range(len(poly.faces))]
+        return rounding * float(min(widths)) if widths else 0.0
+
+    def fit(planes: list[int]) -> RoundedFit | None:
+        cap = radius_cap(planes)
+        if cap is None:
+            return None
+        idx = sorted({i for j in keep for i in groups[j]})
+        return fit_rounded(
+            centres[idx],
+            normals[planes],
+            offsets[planes],
+            rho,
+            fixed=fixed_a[planes],
+            max_radius=cap,
+            floor=floor,
+        )
+
+    def near(k: int, fitted: RoundedFit, cap: float) -> bool:
+        """Whether ``k``'s touches lie within ``PREFILTER`` × ``sigmas`` scales of the fitted
+        envelope without ``k``, refitting nothing (at three radii up to ``cap``): a face of
+        the object lies far inside it, and its costly refit is skipped."""
+        at = [p for p, j in enumerate(keep) if j != k]
+        c = centres[list(groups[k])]
+        n, e = fitted.normals[at], fitted.offsets[at]
+        middle = c.mean(axis=0)
+        bound = (middle, 3.0 * float(np.linalg.norm(c - middle, axis=1).max()) + 1.0)
+        limit = PREFILTER * sigmas * max(fitted.scale, floor)
+        for r in (fitted.radius, 0.5 * cap, cap):
+            feats = _features(c, n, e - rho - r, bound)
+            if feats is None:
+                return True  # no judgement without a closed envelope: refit
+            res = _residuals(c, n, e, r, rho, _pack(feats))
+            if float(np.abs(res).max()) <= limit:
+                return True
+        return False
+
+    current = fit(keep)
+    if current is None:
+        return [], None
+    removed: list[int] = []
+    while True:
+        order = sorted((k for k in candidates if k in keep), key=lambda k: (len(groups[k]), k))
+        found = False
+        for k in order:
+            rest = [j for j in keep if j != k]
+            if len(rest) < 4:
+                continue
+            cap = radius_cap(rest)
+            if cap is None or not near(k, current, cap):
+                continue
+            trial = fit(rest)
+            if trial is None:
+                continue
+            idx = sorted({i for j in keep for i in groups[j]})
+            pos = {i: p for p, i in enumerate(idx)}
+            mine = np.asarray([pos[i] for i in groups[k]], dtype=np.intp)
+            others = np.setdiff1d(np.arange(len(idx)), mine)
+            before = _robust_rms(current.residuals[others], current.scale)
+            after = _robust_rms(trial.residuals[others], trial.scale)
+            res = trial.residuals[mine]
+            s = max(current.scale, floor)
+            ok = _wide(trial, rest, mine, rho, min_width) and (
+                float(np.abs(res).max()) <= sigmas * s
+                and abs(float(res.mean())) <= 2.0 * s / math.sqrt(len(res))
+                and float(np.mean(trial.kinds[mine] != FACE)) >= 0.5
+                and after <= growth * max(before, floor)
+            )
+            if ok:
+                keep = rest
+                removed.append(k)
+                current = trial
+                found = True
+                break
+        if not found:
+            return removed, current
+
+
+def _wide(
+    fit: RoundedFit, planes: list[int], mine: NDArray[np.intp], rho: float, min_width: float
+) -> bool:
+    """Whether every face of the object the touches ``mine`` lie against (in ``fit``, whose
+    planes are ``planes``) is at least ``min_width`` wide: a rounding joins faces, a curved
+    object's facets are narrow and stay."""
+    if min_width <= 0:
+        return True
+    try:
+        poly = polyhedron_from_planes(fit.normals, fit.offsets - rho)
+    except GeometryError:
+        return False
+    width = dict.fromkeys(range(len(planes)), 0.0)
+    for f in range(len(poly.faces)):
+        width[int(poly.plane_index[f])] = face_width(poly, f)
+    against = np.unique(fit.planes[mine])
+    return all(width[int(j)] >= min_width for j in against)
+
+
+def _robust_rms(res: FloatArray, scale: float) -> float:
+    clipped = np.clip(res, -3.0 * scale, 3.0 * scale)
+    return float(np.sqrt(np.mean(clipped * clipped))) if len(res) else 0.0
+
+
+def _closed(normals: FloatArray, offsets: FloatArray, pts: FloatArray) -> Polyhedron | None:
+    middle = pts.mean(axis=0)
+    bound = (middle, 3.0 * float(np.linalg.norm(pts - middle, axis=1).max()))
+    try:
+        return polyhedron_from_planes(normals, offsets, bound=bound)
+    except GeometryError:
+        return None

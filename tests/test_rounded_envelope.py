@@ -1,0 +1,186 @@
+"""The rounded envelope (issue 10, item 3): one convex polyhedron with rounded edges fitted to
+all the tip centres, and the faces it explains.
+
+Ground truth is the geometry built here: a box ``K`` and the tip centres a tip of radius ρ
+puts on ``K ⊕ B(ρ + r)`` (on the faces, on the quarter cylinders of the edges' roundings),
+planes turned and moved off the true ones by known amounts, and a plane fitted through the
+touches of one rounding.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from tactile_kb import solids
+from tactile_kb.geometry.model import build_model
+from tactile_kb.geometry.rounded import fit_rounded, unexplained
+from tactile_kb.settings import override
+from tactile_kb.touch.finger import builtin_finger
+from tactile_kb.touch.synthetic import sample_record
+
+RHO = 0.005
+HALF = np.array([0.04, 0.03, 0.025])  # K, a 8 × 6 × 5 cm box about the origin
+NORMALS = np.array(
+    [[1.0, 0, 0], [-1, 0, 0], [0, 1, 0], [0, -1, 0], [0, 0, 1], [0, 0, -1]], dtype=float
+)
+
+
+def _k_offsets() -> np.ndarray:
+    return np.abs(NORMALS) @ HALF
+
+
+def _centres(
+    r: float, seed: int = 0, per_face: int = 8, per_edge: int = 3
+) -> tuple[np.ndarray, list[list[int]], list[int]]:
+    """Tip centres on ``K ⊕ B(ρ + r)``: ``per_face`` on each face (inside its polygon) and
+    ``per_edge`` on the rounding of the edge between faces 0 (+x) and 2 (+y); the groups of
+    the six faces, and the indices of the rounding's centres."""
+    rng = np.random.default_rng(seed)
+    big = RHO + r
+    pts: list[np.ndarray] = []
+    groups: list[list[int]] = [[] for _ in NORMALS]
+    for j, n in enumerate(NORMALS):
+        axes = [a for a in range(3) if n[a] == 0]
+        for _ in range(per_face):
+            p = n * (np.abs(n) @ HALF + big)
+            for a in axes:
+                p[a] = rng.uniform(-0.8, 0.8) * HALF[a]
+            groups[j].append(len(pts))
+            pts.append(p)
+    rounding = []
+    for k in range(per_edge):
+        t = (k + 1) / (per_edge + 1) * math.pi / 2  # round the edge from +x to +y
+        p = np.array(
+            [
+                HALF[0] + big * math.cos(t),
+                HALF[1] + big * math.sin(t),
+                (k - (per_edge - 1) / 2) * 0.3 * HALF[2],
+            ]
+        )
+        rounding.append(len(pts))
+        pts.append(p)
+    return np.asarray(pts), groups, rounding
+
+
+def _turned(n: np.ndarray, deg: float, seed: int) -> np.ndarray:
+    rng = np.random.default_rng(seed)
+    axis = np.cross(n, rng.normal(size=3))
+    axis /= np.linalg.norm(axis)
+    t = math.radians(deg)
+    out = n * math.cos(t) + np.cross(axis, n) * math.sin(t)
+    return out / np.linalg.norm(out)
+
+
+def test_the_fit_recovers_the_planes_and_the_rounding_radius() -> None:
+    r = 0.003
+    c, _, _ = _centres(r)
+    start_n = np.array([_turned(n, 2.0, k) for k, n in enumerate(NORMALS)])
+    start_e = _k_offsets() + RHO + r + 0.001
+    fit = fit_rounded(c, start_n, start_e, RHO, max_radius=0.006, floor=1e-5)
+    assert fit is not None
+    turn = np.degrees(np.arccos(np.clip(np.einsum("ij,ij->i", fit.normals, NORMALS), -1, 1)))
+    assert turn.max() < 0.05
+    np.testing.assert_allclose(fit.offsets, _k_offsets() + RHO + r, atol=2e-5)
+    assert fit.radius == pytest.approx(r, abs=2e-5)
+    assert np.abs(fit.residuals).max() < 2e-5
+    # the rounding's touches lie against the edge of +x and +y, the rest against faces
+    assert (fit.kinds == 1).sum() == 3
+    assert {tuple(sorted(p)) for p in fit.planes[fit.kinds == 1].tolist()} == {(0, 2)}
+
+
+def test_a_fixed_plane_stays_where_it_is() -> None:
+    c, _, _ = _centres(0.002)
+    start_e = _k_offsets() + RHO + 0.002
+    start_e[5] += 0.001  # the bottom, held 1 mm off: the others fit around it
+    fixed = [False] * 5 + [True]
+    fit = fit_rounded(c, NORMALS, start_e, RHO, fixed=fixed, max_radius=0.004, floor=1e-5)
+    assert fit is not None
+    assert fit.offsets[5] == start_e[5]
+    np.testing.assert_array_equal(fit.normals[5], NORMALS[5])
+
+
+def test_planes_that_do_not_close_give_no_fit() -> None:
+    c, _, _ = _centres(0.002)
+    assert (
+        fit_rounded(c, NORMALS[:3], _k_offsets()[:3] + RHO, RHO, max_radius=0.004, floor=1e-5)
+        is None
+    )
+
+
+def _with_rounding_plane(r: float) -> tuple[np.ndarray, list[list[int]], np.ndarray, np.ndarray]:
+    """The six faces' planes plus the least-squares plane of the +x/+y rounding's touches."""
+    c, groups, rounding = _centres(r, per_edge=5)
+    p = c[rounding]
+    middle = p.mean(axis=0)
+    n = np.array([1.0, 1.0, 0.0]) / math.sqrt(2.0)  # the touches' mean normal
+    normals = np.vstack([NORMALS, n])
+    offsets = np.append(_k_offsets() + RHO + r, float(middle @ n))
+    return c, [*groups, rounding], normals, offsets
+
+
+def test_a_plane_of_a_roundings_touches_is_explained_and_the_faces_are_not() -> None:
+    c, groups, normals, offsets = _with_rounding_plane(0.004)
+    removed, fit = unexplained(
+        c,
+        groups,
+        normals,
+        offsets,
+        RHO,
+        fixed=[False] * 7,
+        candidates=range(7),
+        rounding=0.1,
+        floor=2e-4,
+        min_width=2 * RHO,
+    )
+    assert removed == [6]
+    assert fit is not None
+    assert len(fit.normals) == 6
+
+
+def test_a_bevel_as_wide_as_a_face_is_not_explained() -> None:
+    # K with its +x/+y edge cut by a 2.5 cm bevel: a face of the object, touched along its
+    # middle; without it, the others' corner lies 9 mm outside its touches
+    cut = np.array([1.0, 1.0, 0.0]) / math.sqrt(2.0)
+    depth = 0.009
+    offsets_k = np.append(_k_offsets(), float(np.array([HALF[0], HALF[1], 0.0]) @ cut) - depth)
+    normals = np.vstack([NORMALS, cut])
+    rng = np.random.default_rng(3)
+    pts, groups = [], [[] for _ in normals]
+    along = np.cross(cut, [0.0, 0.0, 1.0])
+    for j, n in enumerate(normals):
+        for _ in range(8):
+            if j == 6:
+                base = n * offsets_k[6] + along * rng.uniform(-0.004, 0.004)
+                base[2] = rng.uniform(-0.8, 0.8) * HALF[2]
+            else:
+                base = n * offsets_k[j]
+                for a in (a for a in range(3) if n[a] == 0):
+                    base[a] = rng.uniform(-0.5, 0.5) * HALF[a]
+            groups[j].append(len(pts))
+            pts.append(base + RHO * n)
+    removed, _ = unexplained(
+        np.asarray(pts),
+        groups,
+        normals,
+        offsets_k + RHO,
+        RHO,
+        fixed=[False] * 7,
+        candidates=range(7),
+        rounding=0.1,
+        floor=2e-4,
+        min_width=2 * RHO,
+    )
+    assert removed == []
+
+
+def test_a_sharp_solids_model_keeps_every_face() -> None:
+    finger = builtin_finger("33")
+    rec = sample_record(solids.box(0.08, 0.06, 0.05), finger, per_face=8, seed=2)
+    with_it = build_model(rec)
+    without = build_model(rec, rounded=False)
+    assert len(with_it.faces) == len(without.faces) == 6
+    with override(geometry={"rounded_fit_sigmas": 0.0}):
+        assert len(build_model(rec).faces) == 6
