@@ -16,7 +16,7 @@ import pytest
 
 from tactile_kb import solids
 from tactile_kb.geometry.model import build_model
-from tactile_kb.geometry.rounded import fit_rounded, unexplained
+from tactile_kb.geometry.rounded import RoundedFit, fit_rounded, unexplained
 from tactile_kb.settings import override
 from tactile_kb.touch.finger import builtin_finger
 from tactile_kb.touch.synthetic import sample_record
@@ -121,27 +121,35 @@ def _with_rounding_plane(r: float) -> tuple[np.ndarray, list[list[int]], np.ndar
     return c, [*groups, rounding], normals, offsets
 
 
-def test_a_plane_of_a_roundings_touches_is_explained_and_the_faces_are_not() -> None:
-    c, groups, normals, offsets = _with_rounding_plane(0.004)
-    removed, fit = unexplained(
+def _explained(
+    c: np.ndarray, groups: list[list[int]], normals: np.ndarray, offsets: np.ndarray
+) -> tuple[list[int], RoundedFit | None]:
+    """:func:`unexplained` with every plane free and a candidate, 0.2 mm least scale."""
+    m = len(normals)
+    return unexplained(
         c,
         groups,
         normals,
         offsets,
         RHO,
-        fixed=[False] * 7,
-        candidates=range(7),
+        fixed=[False] * m,
+        candidates=range(m),
         rounding=0.1,
         floor=2e-4,
         min_width=2 * RHO,
     )
+
+
+def test_a_plane_of_a_roundings_touches_is_explained_and_the_faces_are_not() -> None:
+    c, groups, normals, offsets = _with_rounding_plane(0.004)
+    removed, fit = _explained(c, groups, normals, offsets)
     assert removed == [6]
     assert fit is not None
     assert len(fit.normals) == 6
 
 
 def test_a_bevel_as_wide_as_a_face_is_not_explained() -> None:
-    # K with its +x/+y edge cut by a 2.5 cm bevel: a face of the object, touched along its
+    # K with its +x/+y edge cut by a 1.8 cm bevel: a face of the object, touched along its
     # middle; without it, the others' corner lies 9 mm outside its touches
     cut = np.array([1.0, 1.0, 0.0]) / math.sqrt(2.0)
     depth = 0.009
@@ -161,18 +169,7 @@ def test_a_bevel_as_wide_as_a_face_is_not_explained() -> None:
                     base[a] = rng.uniform(-0.5, 0.5) * HALF[a]
             groups[j].append(len(pts))
             pts.append(base + RHO * n)
-    removed, _ = unexplained(
-        np.asarray(pts),
-        groups,
-        normals,
-        offsets_k + RHO,
-        RHO,
-        fixed=[False] * 7,
-        candidates=range(7),
-        rounding=0.1,
-        floor=2e-4,
-        min_width=2 * RHO,
-    )
+    removed, _ = _explained(np.asarray(pts), groups, normals, offsets_k + RHO)
     assert removed == []
 
 

@@ -280,8 +280,7 @@ def build_model(
         )
         drop = _far_from_edges(faces, drop, arrays[0], record.tip_radius, noise, edge_rounding)
         if drop:
-            edge_contacts = tuple(sorted(i for k in drop for i in faces[k].contacts))
-            faces = tuple(f for k, f in enumerate(faces) if k not in drop)
+            faces, edge_contacts = _without(faces, drop, edge_contacts)
             points, normals, offsets, supporting = _support(
                 arrays[0], record.tip_radius, faces, tol, noise
             )
@@ -290,10 +289,7 @@ def build_model(
             faces, supporting, arrays[0], record.tip_radius, noise=noise, rounding=edge_rounding
         )
         if drop:
-            edge_contacts = tuple(
-                sorted((*edge_contacts, *(i for k in drop for i in faces[k].contacts)))
-            )
-            faces = tuple(f for k, f in enumerate(faces) if k not in drop)
+            faces, edge_contacts = _without(faces, drop, edge_contacts)
             points, normals, offsets, supporting = _support(
                 arrays[0], record.tip_radius, faces, tol, noise
             )
@@ -314,10 +310,7 @@ def build_model(
     ):
         drop = _rounded_drop(faces, supporting, arrays[0], record.tip_radius, noise, edge_rounding)
         if drop:
-            edge_contacts = tuple(
-                sorted((*edge_contacts, *(i for k in drop for i in faces[k].contacts)))
-            )
-            faces = tuple(f for k, f in enumerate(faces) if k not in drop)
+            faces, edge_contacts = _without(faces, drop, edge_contacts)
             points, normals, offsets, supporting = _support(
                 arrays[0], record.tip_radius, faces, tol, noise
             )
@@ -495,6 +488,14 @@ def _sensed(record: ExplorationRecord, directions: FloatArray) -> FloatArray:
     slide = np.asarray([c.kind != "touch" for c in record.contacts], dtype=bool)
     out[slide] = np.nan
     return out
+
+
+def _without(
+    faces: tuple[Face, ...], drop: list[int], edge_contacts: tuple[int, ...]
+) -> tuple[tuple[Face, ...], tuple[int, ...]]:
+    """``faces`` without those in ``drop``, and ``edge_contacts`` with their contacts."""
+    contacts = tuple(sorted((*edge_contacts, *(i for k in drop for i in faces[k].contacts))))
+    return tuple(f for k, f in enumerate(faces) if k not in drop), contacts
 
 
 def _rounded_drop(

@@ -211,8 +211,7 @@ def fit_rounded(
     n0 = np.asarray(normals, dtype=float).copy()
     e0 = np.asarray(offsets, dtype=float).copy()
     u, v = _tangents(n0)
-    middle = centres.mean(axis=0)
-    bound = (middle, 3.0 * float(np.linalg.norm(centres - middle, axis=1).max()))
+    bound = _bound(centres)
 
     def unpack(x: FloatArray) -> tuple[FloatArray, FloatArray, float]:
         n = n0.copy()
@@ -290,17 +289,28 @@ def unexplained(
     candidates: Sequence[int],
     rounding: float,
     floor: float,
-    sigmas: float = 3.5,
+    sigmas: float = 2.5,
     growth: float = 1.25,
     min_width: float = 0.0,
 ) -> tuple[list[int], RoundedFit | None]:
     """Which of the ``candidates`` (indices into the planes) the rounded envelope of the other
     planes explains, removed one at a time (fewest touches first), and the final fit.
 
-    ``groups[j]`` are the indices (into ``centres``) of plane ``j``'s touches. A plane is
-    explained when, fitted without it, every one of its touches lies within ``sigmas`` ×
-    the fit's robust scale of the model, the other touches' robust RMS grows by at most
-    ``growth`` ×, and ``r`` is at most ``rounding`` × the narrowest face's width of ``K``.
+    ``normals · x = offsets`` are the planes of the tip centres (the faces' planes moved out
+    by ρ); planes flagged ``fixed`` (the table) are not fitted. ``groups[j]`` are the indices
+    (into ``centres``) of plane ``j``'s touches. A plane is explained when, with the envelope
+    fitted again without it (``r`` at most ``rounding`` × the narrowest face's width of the
+    object's polyhedron):
+
+    * every one of its touches lies within ``sigmas`` × the robust scale of the fit with it
+      (at least ``floor``) of the envelope, and their mean within 2 scales/√m (a face of the
+      object leaves its touches inside, all on one side);
+    * at least half of them lie on an edge's or a corner's rounding, against faces at least
+      ``min_width`` wide (a curved object's facets stay);
+    * the other touches' RMS, clipped at 3 scales, grows by at most ``growth`` ×.
+
+    A plane whose touches lie further than :data:`PREFILTER` × that limit from the envelope
+    with it, its own plane left out and nothing refitted, is not fitted again.
     """
     keep = list(range(len(normals)))
     fixed_a = np.asarray(fixed, dtype=bool)
@@ -335,8 +345,7 @@ def unexplained(
         at = [p for p, j in enumerate(keep) if j != k]
         c = centres[list(groups[k])]
         n, e = fitted.normals[at], fitted.offsets[at]
-        middle = c.mean(axis=0)
-        bound = (middle, 3.0 * float(np.linalg.norm(c - middle, axis=1).max()) + 1.0)
+        bound = _bound(centres[sorted({i for j in keep for i in groups[j]})])
         limit = PREFILTER * sigmas * max(fitted.scale, floor)
         for r in (fitted.radius, 0.5 * cap, cap):
             feats = _features(c, n, e - rho - r, bound)
@@ -412,10 +421,15 @@ def _robust_rms(res: FloatArray, scale: float) -> float:
     return float(np.sqrt(np.mean(clipped * clipped))) if len(res) else 0.0
 
 
-def _closed(normals: FloatArray, offsets: FloatArray, pts: FloatArray) -> Polyhedron | None:
+def _bound(pts: FloatArray) -> tuple[FloatArray, float]:
+    """Where planes must close: within three times the touched points' radius about their
+    centre (as :func:`tactile_kb.geometry.model.build_model` asks)."""
     middle = pts.mean(axis=0)
-    bound = (middle, 3.0 * float(np.linalg.norm(pts - middle, axis=1).max()))
+    return middle, 3.0 * float(np.linalg.norm(pts - middle, axis=1).max())
+
+
+def _closed(normals: FloatArray, offsets: FloatArray, pts: FloatArray) -> Polyhedron | None:
     try:
-        return polyhedron_from_planes(normals, offsets, bound=bound)
+        return polyhedron_from_planes(normals, offsets, bound=_bound(pts))
     except GeometryError:
         return None
