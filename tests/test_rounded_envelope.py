@@ -148,6 +148,21 @@ def test_a_plane_of_a_roundings_touches_is_explained_and_the_faces_are_not() -> 
     assert len(fit.normals) == 6
 
 
+def test_two_roundings_planes_are_both_explained() -> None:
+    # the +x/+y rounding's plane and its mirror on the -x/-y edge: after the first is dropped,
+    # the second is judged against the same touches (the first's included)
+    c, groups, normals, offsets = _with_rounding_plane(0.004)
+    mirror = c[groups[6]] * np.array([-1.0, -1.0, 1.0])
+    c = np.vstack([c, mirror])
+    groups = [*groups, list(range(len(c) - len(mirror), len(c)))]
+    normals = np.vstack([normals, normals[6] * np.array([-1.0, -1.0, 1.0])])
+    offsets = np.append(offsets, offsets[6])
+    removed, fit = _explained(c, groups, normals, offsets)
+    assert sorted(removed) == [6, 7]
+    assert fit is not None
+    assert len(fit.residuals) == len(c)
+
+
 def test_a_bevel_as_wide_as_a_face_is_not_explained() -> None:
     # K with its +x/+y edge cut by a 1.8 cm bevel: a face of the object, touched along its
     # middle; without it, the others' corner lies 9 mm outside its touches

@@ -224,8 +224,10 @@ def fit_rounded(
         return n, e, float(x[-1])
 
     x = np.zeros(3 * len(free) + 1)
-    x[-1] = 0.5 * max_radius
-    scale = floor
+    lo = np.full(len(x), -np.inf)
+    hi = np.full(len(x), np.inf)
+    lo[-1], hi[-1] = 0.0, max(max_radius, 1e-9)
+    x[-1] = min(max(0.5 * max_radius, 0.0), hi[-1])
     feats = _features(centres, n0, e0 - rho - x[-1], bound)
     if feats is None:
         return None
@@ -236,12 +238,7 @@ def fit_rounded(
             n, e, r = unpack(y)
             return _residuals(centres, n, e, r, rho, fs)
 
-        res0 = fun(x)
-        scale = max(floor, 1.4826 * float(np.median(np.abs(res0))))
-        lo = np.full(len(x), -np.inf)
-        hi = np.full(len(x), np.inf)
-        lo[-1], hi[-1] = 0.0, max(max_radius, 1e-9)
-        x[-1] = min(max(x[-1], 0.0), hi[-1])
+        scale = max(floor, _robust_scale(fun(x)))
         try:
             sol = least_squares(
                 fun,
@@ -264,15 +261,15 @@ def fit_rounded(
             break
         feats = new
     n, e, r = unpack(x)
-    res = _residuals(centres, n, e, r, rho, _pack(feats))
-    scale = max(floor, 1.4826 * float(np.median(np.abs(res))))
-    kinds, fi, fj, _ = _pack(feats)
+    packed = _pack(feats)
+    res = _residuals(centres, n, e, r, rho, packed)
+    kinds, fi, fj, _ = packed
     return RoundedFit(
         normals=n,
         offsets=e,
         radius=r,
         residuals=res,
-        scale=scale,
+        scale=max(floor, _robust_scale(res)),
         kinds=kinds,
         planes=np.column_stack([fi, fj]),
     )
@@ -299,8 +296,8 @@ def unexplained(
     ``normals · x = offsets`` are the planes of the tip centres (the faces' planes moved out
     by ρ); planes flagged ``fixed`` (the table) are not fitted. ``groups[j]`` are the indices
     (into ``centres``) of plane ``j``'s touches. A plane is explained when, with the envelope
-    fitted again without it (``r`` at most ``rounding`` × the narrowest face's width of the
-    object's polyhedron):
+    fitted again without it to all the touches, a dropped face's too (``r`` at most
+    ``rounding`` × the narrowest width of the object's faces at least ``min_width`` wide):
 
     * every one of its touches lies within ``sigmas`` × the robust scale of the fit with it
       (at least ``floor``) of the envelope, and their mean within 2 scales/√m (a face of the
@@ -314,22 +311,25 @@ def unexplained(
     """
     keep = list(range(len(normals)))
     fixed_a = np.asarray(fixed, dtype=bool)
+    # every touch, a dropped face's too, lies on the envelope: one set of centres throughout
+    idx = np.asarray(sorted({i for g in groups for i in g}), dtype=np.intp)
+    pts = centres[idx]
+    bound = _bound(pts)
+    pos = {int(i): p for p, i in enumerate(idx)}
 
     def radius_cap(planes: list[int]) -> float | None:
-        idx = sorted({i for j in keep for i in groups[j]})
-        poly = _closed(normals[planes], offsets[planes] - rho, centres[idx])
+        poly = _closed(normals[planes], offsets[planes] - rho, pts)
         if poly is None:
             return None
+        # the narrowest face that is no rounding itself (at least min_width wide) caps r:
+        # a second rounding's narrow plane must not stop the first from being explained
         widths = [face_width(poly, f) for f in range(len(poly.faces))]
-        return rounding * float(min(widths)) if widths else 0.0
+        wide = [w for w in widths if w >= min_width] or widths
+        return rounding * float(min(wide)) if wide else 0.0
 
-    def fit(planes: list[int]) -> RoundedFit | None:
-        cap = radius_cap(planes)
-        if cap is None:
-            return None
-        idx = sorted({i for j in keep for i in groups[j]})
+    def fit(planes: list[int], cap: float) -> RoundedFit | None:
         return fit_rounded(
-            centres[idx],
+            pts,
             normals[planes],
             offsets[planes],
             rho,
@@ -345,7 +345,6 @@ def unexplained(
         at = [p for p, j in enumerate(keep) if j != k]
         c = centres[list(groups[k])]
         n, e = fitted.normals[at], fitted.offsets[at]
-        bound = _bound(centres[sorted({i for j in keep for i in groups[j]})])
         limit = PREFILTER * sigmas * max(fitted.scale, floor)
         for r in (fitted.radius, 0.5 * cap, cap):
             feats = _features(c, n, e - rho - r, bound)
@@ -356,7 +355,8 @@ def unexplained(
                 return True
         return False
 
-    current = fit(keep)
+    cap = radius_cap(keep)
+    current = fit(keep, cap) if cap is not None else None
     if current is None:
         return [], None
     removed: list[int] = []
@@ -370,11 +370,9 @@ def unexplained(
             cap = radius_cap(rest)
             if cap is None or not near(k, current, cap):
                 continue
-            trial = fit(rest)
+            trial = fit(rest, cap)
             if trial is None:
                 continue
-            idx = sorted({i for j in keep for i in groups[j]})
-            pos = {i: p for p, i in enumerate(idx)}
             mine = np.asarray([pos[i] for i in groups[k]], dtype=np.intp)
             others = np.setdiff1d(np.arange(len(idx)), mine)
             before = _robust_rms(current.residuals[others], current.scale)
@@ -414,6 +412,11 @@ def _wide(
         width[int(poly.plane_index[f])] = face_width(poly, f)
     against = np.unique(fit.planes[mine])
     return all(width[int(j)] >= min_width for j in against)
+
+
+def _robust_scale(res: FloatArray) -> float:
+    """1.4826 × the median absolute residual: σ of normal residuals, robust to outliers."""
+    return 1.4826 * float(np.median(np.abs(res)))
 
 
 def _robust_rms(res: FloatArray, scale: float) -> float:
