@@ -8,8 +8,9 @@ the model built from the record so far (:func:`tactile_kb.geometry.model.build_m
 controller for one more touch at a time (a :class:`~tactile_kb.touch.servo.Probe`: approach along
 the missing normal from outside the object), until
 
-* the envelope is closed and every side face has tip centres at two heights
-  (ending ``"closed"``), or
+* the envelope is closed and every side face has tip centres at two heights, or every tip
+  centre lies on one sphere (:func:`~tactile_kb.features.builtin.centres_on_sphere`: a ball,
+  whose facets in the model are no faces to touch again) (ending ``"closed"``), or
 * the budget (:class:`CompletionParams`: touches and path length spent by the completion)
   runs out (``"budget"``), or
 * what stayed open cannot be reached: :attr:`CompletionParams.attempts` probes for it found
@@ -55,6 +56,7 @@ import numpy as np
 from scipy.spatial import ConvexHull, QhullError
 
 from tactile_kb.errors import TactileKBError, UsageError
+from tactile_kb.features.builtin import centres_on_sphere
 from tactile_kb.geometry.model import ObjectModel, build_model
 from tactile_kb.geometry.planes import (
     SMOOTH_RHO,
@@ -1419,6 +1421,13 @@ class ModelCompleter:
         except (TactileKBError, np.linalg.LinAlgError, ValueError) as exc:
             text = f"the model cannot be built after {record.touches} touches: {exc}"
             return Ending("unreachable", text, (str(exc),))
+        if model.polyhedron is not None and centres_on_sphere(model):
+            return Ending(
+                "closed",
+                f"the model is closed and every tip centre lies on one sphere: a ball, whose "
+                f"facets are no faces to touch at two heights ({record.touches} touches, "
+                f"{record.touches - self._start[0]} of them by the completion)",
+            )
         wanted = [
             p
             for p in completion_probes(model, height_gap=self.params.height_gap)

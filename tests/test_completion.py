@@ -15,7 +15,8 @@ from scanlike import bumped, jittered, rounded_box
 
 from tactile_kb import solids
 from tactile_kb.cli import main
-from tactile_kb.completion import CompletionParams, completion_probes, model_completer
+from tactile_kb.completion import CompletionParams, completing, completion_probes, model_completer
+from tactile_kb.features.builtin import centres_on_sphere
 from tactile_kb.geometry.model import build_model
 from tactile_kb.geometry.planes import SMOOTH_RHO, surface_detail
 from tactile_kb.pipeline import classify
@@ -409,3 +410,28 @@ def test_lugs_higher_than_the_last_layer_are_found_under_the_top(lug_height: flo
     assert len(set(result.record.unreachable)) == len(result.record.unreachable)
     assert result.decision.label == "composed_of_boxes"
     assert classify(lidded, rules="parallelepipeds", seed=0).decision.label == "not_hexahedron"
+
+
+@pytest.mark.parametrize("noise", [0.0, 0.0005])
+def test_a_balls_completion_ends_once_every_touch_lies_on_one_sphere(noise: float) -> None:
+    # the contour layers make facets of a ball; a second height on each facet would spend two
+    # touches a facet (an 8 cm ball took 136 touches and 50 s) and tell nothing new
+    radius = 0.035
+    ball = solids.sphere(radius)
+    rec = completing(StepperExplorer()).explore(ball, seed=0, noise=noise)
+    assert rec.ending == "closed"
+    assert rec.unreachable == []
+    assert rec.contacts_per_phase.get("complete", 0) <= 4
+    centres = np.asarray([c.centre for c in rec.contacts])
+    # the truth, from the built ball: every tip centre lies ρ outside its (faceted) surface
+    distance = np.linalg.norm(centres - np.array([0.0, 0.0, radius]), axis=1)
+    assert np.all(np.abs(distance - (radius + RHO)) < 0.03 * radius + 4 * noise)
+    assert classify(ball, rules="polyhedra", noise=noise).decision.label == "curved"
+
+
+def test_a_box_is_not_ended_as_a_ball() -> None:
+    rec = completing(StepperExplorer()).explore(solids.box(*BOX), seed=0)
+    model = build_model(rec)
+    assert rec.ending == "closed"
+    assert len(model.contact_faces) == 5
+    assert not centres_on_sphere(model)
