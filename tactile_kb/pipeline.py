@@ -186,8 +186,10 @@ class _Evidence:
         key = id(rec)
         if self._model is None or self._model_of != key:
             # A model open only at the top (the 4-sensor finger never feels a top) is closed
-            # at the highest touch; the model says so in ``assumed_top``.
-            self._model = build_model(rec, assume_top=True)
+            # at the highest touch; the model says so in ``assumed_top``. One open elsewhere
+            # (a side the finger could not touch) is closed at the farthest touches that way
+            # (``assumed_reach``); the record's ending says what stayed open.
+            self._model = build_model(rec, assume_top=True, assume_reach=True)
             self._model_of = key
         return self._model
 

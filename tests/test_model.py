@@ -140,6 +140,55 @@ def test_assumed_top_only_when_the_top_alone_is_open() -> None:
     assert model.open_directions != [(0.0, 0.0, 1.0)]
 
 
+def test_assumed_reach_closes_a_side_no_face_was_touched_on() -> None:
+    # a box whose +x side was never touched: the model is open that way; closed by an assumed
+    # face through the farthest touched point, the object reaches at least that far
+    rec = sample_record(solids.box(0.08, 0.06, 0.05), F33, per_face=8, noise=0.0, seed=3)
+    keep = [c for c in rec.contacts if c.direction[0] > -0.5]  # not the +x side (sensed −x)
+    partial = rec.model_copy(update={"contacts": keep})
+    assert build_model(partial).polyhedron is None
+    assert build_model(partial, assume_top=True).polyhedron is None  # not only upwards
+    model = build_model(partial, assume_reach=True)
+    assert model.polyhedron is not None
+    assert len(model.assumed_reach) == 1
+    assert np.allclose(model.assumed_reach[0], (1.0, 0.0, 0.0), atol=1e-6)
+    assumed = [f for f in model.faces if f.source == "assumed"]
+    assert len(assumed) == 1
+    assert assumed[0].n_contacts == 0
+    reach = max(c.point[0] for c in keep)
+    assert assumed[0].offset == reach  # the farthest touched point that way
+    assert reach <= 0.04 + 1e-9  # the box's own +x face is at 4 cm: never beyond the object
+    x0, x1 = model.polyhedron.vertices[:, 0].min(), model.polyhedron.vertices[:, 0].max()
+    assert abs(x0 + 0.04) < 1e-6
+    assert abs(x1 - reach) < 1e-6
+    # nothing to assume on a closed model
+    whole = build_model(rec, assume_reach=True)
+    assert whole.assumed_reach == ()
+    assert all(f.source != "assumed" for f in whole.faces)
+
+
+def test_features_that_need_the_true_extent_are_not_established_on_an_assumed_reach() -> None:
+    from tactile_kb.features.builtin import congruent_faces, equal_edges
+
+    rec = sample_record(solids.box(0.06, 0.06, 0.06), F33, per_face=8, noise=0.0, seed=3)
+    assert equal_edges(build_model(rec))  # a cube touched on every side
+    keep = [c for c in rec.contacts if c.direction[1] > -0.5]  # not on the +y side
+    model = build_model(rec.model_copy(update={"contacts": keep}), assume_reach=True)
+    assert model.assumed_reach
+    assert not equal_edges(model)
+    assert not congruent_faces(model)
+
+
+def test_assumed_reach_gives_up_when_the_planes_do_not_close() -> None:
+    # two faces touched only: more open directions than MAX_ASSUMED allows, or none closes
+    rec = sample_record(solids.box(0.08, 0.06, 0.05), F33, per_face=8, noise=0.0, seed=3)
+    keep = [c for c in rec.contacts if c.direction[0] > 0.5]  # the −x side alone
+    model = build_model(rec.model_copy(update={"contacts": keep}), assume_reach=True)
+    assert model.polyhedron is None
+    assert model.assumed_reach == ()
+    assert model.open_reason
+
+
 def test_noisy_small_octahedra_collapse_their_split_vertices() -> None:
     # 3–5 cm: four noisy planes at a vertex leave 1–4 mm edges, beyond the merge tolerance
     whole = kept_split = 0

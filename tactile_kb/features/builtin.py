@@ -1504,7 +1504,7 @@ def equal_edges(
     if sigmas is None:
         sigmas = current().features.edge_sigmas
     p = _poly(model, "equal_edges")
-    if model.assumed_top is not None:
+    if model.assumed_top is not None or model.assumed_reach:
         return False
     lengths = _derived(model, (__name__, current().features, "edge_lengths"), p.edge_lengths)
     sig = _edge_sigmas(model)
@@ -1637,7 +1637,7 @@ def congruent_faces(
     tolerance_deg = _default(tolerance_deg, "tolerance_deg")
     sigmas = current().features.edge_sigmas
     _poly(model, "congruent_faces")
-    if model.assumed_top is not None:
+    if model.assumed_top is not None or model.assumed_reach:
         return False
     same, diffs, pair, dangles, angle_pair, scale = _derived(
         model,

@@ -17,6 +17,9 @@ whose sensors lie on the equator, never feels a top face, and contour following 
 block does not reach it either. Then the model is closed by an *assumed top*, the horizontal plane through the highest touched
 point (the object reaches at least that high), recorded as ``assumed_top``: features that
 depend on the true height must not trust it (see :func:`tactile_kb.features.builtin.equal_edges`).
+With ``assume_reach=True``, a model open in other directions (a side the finger could not touch)
+is closed by an assumed face across each, through the farthest touched point that way, recorded
+in ``assumed_reach``.
 
 Examples
 --------
@@ -153,6 +156,10 @@ class ObjectModel:
     options: dict[str, Any] = field(default_factory=dict)
     face_of: tuple[int, ...] = ()
     """For each polyhedron face, the index of its :class:`Face` in ``faces``."""
+    assumed_reach: tuple[tuple[float, float, float], ...] = ()
+    """The normals of the assumed faces that closed a model open in other directions
+    (``build_model(assume_reach=True)``: each through the farthest touched point that way; their
+    :class:`Face` has ``source == "assumed"``); empty when none was needed."""
     assumed_top: float | None = None
     """Height (m) of the assumed top face when the top was never touched and the model was
     closed at the highest touched point (its :class:`Face` has ``source == "assumed"`` and
@@ -189,6 +196,7 @@ def build_model(
     support_tol: float | None = None,
     open_factor: float = 3.0,
     assume_top: bool = False,
+    assume_reach: bool = False,
     collapse_sigmas: float | Literal["settings"] | None = "settings",
     edge_rounding: float | Literal["settings"] | None = "settings",
     rounded: bool = True,
@@ -220,6 +228,13 @@ def build_model(
         When the planes are open only upwards (within :data:`ASSUMED_TOP_DEG` of +z), close
         them by a horizontal face through the highest touched point and record its height
         in ``assumed_top``.
+    assume_reach
+        When the planes stay open in other directions (a side the finger could not touch: a
+        housing's flat mounting ear, lower than the tip, lies beyond the side above it, so
+        that side supports nothing and no face closes the envelope there), close each open
+        direction by a face across it through the farthest touched point that way (the object
+        reaches at least that far), up to :data:`MAX_ASSUMED` faces, and list their normals
+        in ``assumed_reach``.
     collapse_sigmas
         When ``record.noise`` is positive, polyhedron edges shorter than this many
         σ of their length (from the faces' uncertainties) are collapsed into a vertex
@@ -337,11 +352,16 @@ def build_model(
     off_sigma = np.asarray([f.offset_uncertainty for f in faces], dtype=float)
     ang_sigma = np.radians([f.normal_uncertainty_deg for f in faces])
 
-    def close(which: list[int], lid: float | None = None) -> Polyhedron:
+    def close(
+        which: list[int], lid: float | None = None, extra: tuple[Face, ...] = ()
+    ) -> Polyhedron:
         n, d = normals[which], offsets[which]
         off, ang = off_sigma[which], ang_sigma[which]
         if lid is not None:  # an assumed horizontal top, as exact as the table
             n, d = np.vstack([n, [0.0, 0.0, 1.0]]), np.append(d, lid)
+            off, ang = np.append(off, 0.0), np.append(ang, 0.0)
+        for f in extra:  # assumed faces where the object reaches at least
+            n, d = np.vstack([n, f.normal]), np.append(d, f.offset)
             off, ang = np.append(off, 0.0), np.append(ang, 0.0)
         poly = polyhedron_from_planes(
             n,
@@ -373,7 +393,25 @@ def build_model(
         poly = close(kept)
     except OpenModelError as exc:
         if not (assume_top and len(points) >= 4 and _only_upwards(exc.open_directions)):
-            return still_open(exc)
+            if not (assume_reach and len(points) >= 4):
+                return still_open(exc)
+            reached = _assumed_reach(points, exc, lambda extra: close(kept, extra=extra))
+            if reached is None:
+                return still_open(exc)
+            poly, extra = reached
+            faces = (*faces, *extra)
+            supporting.extend(True for _ in extra)
+            kept.extend(range(len(faces) - len(extra), len(faces)))
+            return ObjectModel(
+                record=record,
+                faces=faces,
+                polyhedron=poly,
+                supporting=tuple(supporting),
+                layers=layers,
+                options=options,
+                face_of=tuple(kept[p] for p in poly.plane_index),
+                assumed_reach=tuple(f.normal for f in extra),
+            )
         top = float(points[:, 2].max())
         lid = Face((0.0, 0.0, 1.0), top, 0, 0.0, 0.0, (), False, "assumed")
         try:
@@ -581,6 +619,33 @@ def _support(
     else:
         supporting = [True] * len(faces)
     return points, normals, offsets, supporting
+
+
+MAX_ASSUMED = 6
+"""At most this many assumed faces close an open model (``build_model(assume_reach=True)``)."""
+
+
+def _assumed_reach(
+    points: FloatArray, exc: OpenModelError, close: Callable[[tuple[Face, ...]], Polyhedron]
+) -> tuple[Polyhedron, tuple[Face, ...]] | None:
+    """The polyhedron closed by assumed faces, and those faces: one across each open
+    direction through the farthest of ``points`` that way, then across the directions still
+    open, at most :data:`MAX_ASSUMED`; None when they do not close it."""
+    extra: list[Face] = []
+    while True:
+        directions = [np.asarray(d, dtype=float) for d in exc.open_directions]
+        if not directions or len(extra) + len(directions) > MAX_ASSUMED:
+            return None
+        for d in directions:
+            n = d / float(np.linalg.norm(d))
+            normal = (float(n[0]), float(n[1]), float(n[2]))
+            extra.append(Face(normal, float((points @ n).max()), 0, 0.0, 0.0, (), False, "assumed"))
+        try:
+            return close(tuple(extra)), tuple(extra)
+        except OpenModelError as again:
+            exc = again
+        except GeometryError:
+            return None
 
 
 def _only_upwards(directions: list[tuple[float, float, float]]) -> bool:
