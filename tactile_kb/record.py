@@ -140,7 +140,8 @@ class ExplorationRecord(BaseModel):
     ending: str = Field(
         default="",
         description="how the model-driven completion ended: 'closed' (a closed model, every "
-        "face touched at two heights or every tip centre on one sphere), 'budget' or 'unreachable'; '' when none ran",
+        "face touched at two heights or every tip centre on one sphere), 'budget' or "
+        "'unreachable'; '' when none ran",
     )
     unreachable: list[str] = Field(
         default_factory=list, description="what stayed open when the completion ended"

@@ -352,15 +352,10 @@ def build_model(
     off_sigma = np.asarray([f.offset_uncertainty for f in faces], dtype=float)
     ang_sigma = np.radians([f.normal_uncertainty_deg for f in faces])
 
-    def close(
-        which: list[int], lid: float | None = None, extra: tuple[Face, ...] = ()
-    ) -> Polyhedron:
+    def close(which: list[int], extra: tuple[Face, ...] = ()) -> Polyhedron:
         n, d = normals[which], offsets[which]
         off, ang = off_sigma[which], ang_sigma[which]
-        if lid is not None:  # an assumed horizontal top, as exact as the table
-            n, d = np.vstack([n, [0.0, 0.0, 1.0]]), np.append(d, lid)
-            off, ang = np.append(off, 0.0), np.append(ang, 0.0)
-        for f in extra:  # assumed faces where the object reaches at least
+        for f in extra:  # assumed faces (where the object reaches at least), as exact as the table
             n, d = np.vstack([n, f.normal]), np.append(d, f.offset)
             off, ang = np.append(off, 0.0), np.append(ang, 0.0)
         poly = polyhedron_from_planes(
@@ -392,36 +387,26 @@ def build_model(
     try:
         poly = close(kept)
     except OpenModelError as exc:
-        if not (assume_top and len(points) >= 4 and _only_upwards(exc.open_directions)):
-            if not (assume_reach and len(points) >= 4):
+        top: float | None = None
+        if assume_top and len(points) >= 4 and _only_upwards(exc.open_directions):
+            top = float(points[:, 2].max())
+            extra: tuple[Face, ...] = (
+                Face((0.0, 0.0, 1.0), top, 0, 0.0, 0.0, (), False, "assumed"),
+            )
+            try:
+                poly = close(kept, extra)
+            except GeometryError:  # the sides do not close under that lid either
                 return still_open(exc)
-            reached = _assumed_reach(points, exc, lambda extra: close(kept, extra=extra))
+        elif assume_reach and len(points) >= 4:
+            reached = _assumed_reach(points, exc, lambda more: close(kept, more))
             if reached is None:
                 return still_open(exc)
             poly, extra = reached
-            faces = (*faces, *extra)
-            supporting.extend(True for _ in extra)
-            kept.extend(range(len(faces) - len(extra), len(faces)))
-            return ObjectModel(
-                record=record,
-                faces=faces,
-                polyhedron=poly,
-                supporting=tuple(supporting),
-                layers=layers,
-                options=options,
-                face_of=tuple(kept[p] for p in poly.plane_index),
-                assumed_reach=tuple(f.normal for f in extra),
-            )
-        top = float(points[:, 2].max())
-        lid = Face((0.0, 0.0, 1.0), top, 0, 0.0, 0.0, (), False, "assumed")
-        try:
-            poly = close(kept, top)
-        except GeometryError:  # the sides do not close under that lid either
+        else:
             return still_open(exc)
-        faces = (*faces, lid)
-        supporting.append(True)
-        kept.append(len(faces) - 1)
-        face_of = tuple(kept[p] for p in poly.plane_index)
+        faces = (*faces, *extra)
+        supporting.extend(True for _ in extra)
+        kept.extend(range(len(faces) - len(extra), len(faces)))
         return ObjectModel(
             record=record,
             faces=faces,
@@ -429,8 +414,9 @@ def build_model(
             supporting=tuple(supporting),
             layers=layers,
             options=options,
-            face_of=face_of,
+            face_of=tuple(kept[p] for p in poly.plane_index),
             assumed_top=top,
+            assumed_reach=() if top is not None else tuple(f.normal for f in extra),
         )
     except GeometryError as exc:
         return ObjectModel(

@@ -312,9 +312,9 @@ class Probe:
 @dataclass(frozen=True)
 class Ending:
     """How a model-driven completion ended: ``"closed"`` (the envelope is closed and every face
-    has tip centres at two heights, or every tip centre lies on one sphere), ``"budget"`` (touches or path ran out) or ``"unreachable"``
-    (what stayed open cannot be reached); ``message`` says it in one line, ``unreachable``
-    names what stayed open."""
+    has tip centres at two heights, or every tip centre lies on one sphere), ``"budget"``
+    (touches or path ran out) or ``"unreachable"`` (what stayed open cannot be reached);
+    ``message`` says it in one line, ``unreachable`` names what stayed open."""
 
     status: Literal["closed", "budget", "unreachable"]
     message: str
