@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import contextlib
 from pathlib import Path
 from typing import Any
 
@@ -10,7 +11,7 @@ import pytest
 import trimesh
 
 from tactile_kb import solids
-from tactile_kb.errors import ObjectError, RuleFileError, UsageError
+from tactile_kb.errors import ObjectError, RuleFileError, TactileKBError, UsageError
 from tactile_kb.pipeline import classify, classify_record, knowledge_base
 from tactile_kb.solids import box, fig5_objects, parallelepiped, tetrahedron
 
@@ -243,3 +244,46 @@ def test_polyhedra_report_the_number_of_sides(make: Any, label: str, n: int) -> 
     assert result.decision.label == label
     assert result.reported == {"sides": n}
     assert result.answer.endswith(f"(sides = {n})")
+
+
+@pytest.mark.parametrize(
+    "make",
+    [
+        lambda: solids.box(0.08, 0.06, 0.05),
+        lambda: solids.pyramid(4, 0.05, 0.07),
+        lambda: solids.sphere(0.04),
+        lambda: solids.l_shape(0.1, 0.08, 0.03, 0.04),
+    ],
+)
+def test_records_missing_sides_are_closed_by_assumed_faces_or_refused_cleanly(make: Any) -> None:
+    # a record that never touched the sides beyond a random cut: the model the pipeline
+    # classifies is closed by assumed faces where the touches reached, or the answer is
+    # refused with a TactileKBError naming why; nothing else escapes, and an assumed face
+    # never lies beyond the object (each reaches the farthest touched point only)
+    from tactile_kb.features.builtin import measure, measure_names
+    from tactile_kb.touch.finger import builtin_finger
+    from tactile_kb.touch.synthetic import sample_record
+
+    mesh = make()
+    rec = sample_record(mesh, builtin_finger("33"), per_face=6, noise=0.0, seed=2)
+    sensed = np.asarray([c.direction for c in rec.contacts])
+    rng = np.random.default_rng(5)
+    closed = 0
+    for _ in range(6):
+        d = rng.normal(size=3)
+        d /= np.linalg.norm(d)
+        keep = [c for c, v in zip(rec.contacts, sensed, strict=True) if v @ d < 0.2]
+        part = rec.model_copy(update={"contacts": keep})
+        try:
+            result = classify_record(part, rules="polyhedra")
+        except TactileKBError:
+            continue
+        for name in measure_names():
+            with contextlib.suppress(TactileKBError):
+                measure(result.model, name)
+        for face in result.model.faces:
+            if face.source == "assumed":
+                closed += 1
+                farthest = float((mesh.vertices @ face.normal_array).max())
+                assert face.offset <= farthest + 1e-3  # a millimetre: a facet's estimated point
+    assert closed > 0
