@@ -19,7 +19,7 @@ from tactile_kb.completion import CompletionParams, completing, completion_probe
 from tactile_kb.features.builtin import centres_on_sphere
 from tactile_kb.geometry.model import build_model
 from tactile_kb.geometry.planes import SMOOTH_RHO, surface_detail
-from tactile_kb.pipeline import classify
+from tactile_kb.pipeline import classify, classify_record
 from tactile_kb.record import Contact, ExplorationRecord
 from tactile_kb.touch.servo import ServoParams
 from tactile_kb.touch.stepper import StepperExplorer
@@ -426,7 +426,7 @@ def test_a_balls_completion_ends_once_every_touch_lies_on_one_sphere(noise: floa
     # the truth, from the built ball: every tip centre lies ρ outside its (faceted) surface
     distance = np.linalg.norm(centres - np.array([0.0, 0.0, radius]), axis=1)
     assert np.all(np.abs(distance - (radius + RHO)) < 0.03 * radius + 4 * noise)
-    assert classify(ball, rules="polyhedra", noise=noise).decision.label == "curved"
+    assert classify_record(rec, rules="polyhedra").decision.label == "curved"
 
 
 def test_a_box_is_not_ended_as_a_ball() -> None:

@@ -12,8 +12,11 @@ import trimesh
 
 from tactile_kb import solids
 from tactile_kb.errors import ObjectError, RuleFileError, TactileKBError, UsageError
+from tactile_kb.features.builtin import measure, measure_names
 from tactile_kb.pipeline import classify, classify_record, knowledge_base
 from tactile_kb.solids import box, fig5_objects, parallelepiped, tetrahedron
+from tactile_kb.touch.finger import builtin_finger
+from tactile_kb.touch.synthetic import sample_record
 
 ANSWERS = {
     "cube": "OBJECT IS A CUBE",
@@ -260,10 +263,6 @@ def test_records_missing_sides_are_closed_by_assumed_faces_or_refused_cleanly(ma
     # classifies is closed by assumed faces where the touches reached, or the answer is
     # refused with a TactileKBError naming why; nothing else escapes, and an assumed face
     # never lies beyond the object (each reaches the farthest touched point only)
-    from tactile_kb.features.builtin import measure, measure_names
-    from tactile_kb.touch.finger import builtin_finger
-    from tactile_kb.touch.synthetic import sample_record
-
     mesh = make()
     rec = sample_record(mesh, builtin_finger("33"), per_face=6, noise=0.0, seed=2)
     sensed = np.asarray([c.direction for c in rec.contacts])

@@ -156,10 +156,6 @@ class ObjectModel:
     options: dict[str, Any] = field(default_factory=dict)
     face_of: tuple[int, ...] = ()
     """For each polyhedron face, the index of its :class:`Face` in ``faces``."""
-    assumed_reach: tuple[tuple[float, float, float], ...] = ()
-    """The normals of the assumed faces that closed a model open in other directions
-    (``build_model(assume_reach=True)``: each through the farthest touched point that way; their
-    :class:`Face` has ``source == "assumed"``); empty when none was needed."""
     assumed_top: float | None = None
     """Height (m) of the assumed top face when the top was never touched and the model was
     closed at the highest touched point (its :class:`Face` has ``source == "assumed"`` and
@@ -170,6 +166,15 @@ class ObjectModel:
     def convex(self) -> bool:
         """True when every face supports the object (no concave face was touched)."""
         return all(self.supporting)
+
+    @property
+    def assumed_reach(self) -> tuple[tuple[float, float, float], ...]:
+        """The normals of the assumed faces that closed a model open in other directions than
+        up (``build_model(assume_reach=True)``: each through the farthest touched point that
+        way); empty when none was needed or the model was closed by an assumed top."""
+        if self.assumed_top is not None:
+            return ()
+        return tuple(f.normal for f in self.faces if f.source == "assumed")
 
     @property
     def contact_faces(self) -> tuple[Face, ...]:
@@ -416,7 +421,6 @@ def build_model(
             options=options,
             face_of=tuple(kept[p] for p in poly.plane_index),
             assumed_top=top,
-            assumed_reach=() if top is not None else tuple(f.normal for f in extra),
         )
     except GeometryError as exc:
         return ObjectModel(
