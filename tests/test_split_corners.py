@@ -17,13 +17,17 @@ with one corner pulled out by a fifth of its edge has faces of two shapes.
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 import pytest
 import trimesh
 
 from tactile_kb import solids
 from tactile_kb.features.builtin import (
+    SPLIT_CORNER_RHO,
     _congruence,
+    _split_corners,
     congruent_faces,
     edge_uncertainties,
     equal_edges,
@@ -193,3 +197,29 @@ def test_the_split_corners_bound_follows_the_rel_tol_asked_for() -> None:
     assert congruent_faces(model, rel_tol=0.1)
     assert equal_edges(model, rel_tol=0.1)
     assert not congruent_faces(model)  # the default again: nothing kept from the other call
+
+
+def test_an_uncertain_edge_longer_than_two_tip_radii_is_no_split_corner() -> None:
+    """A long box (22.6 × 3.7 × 2.4 cm) whose faces claim 6° of uncertainty, as faces of a
+    scan touched over a patch a tenth of their size do: its end edges (2.4 and 3.7 cm) are
+    4 σ long or less, but a corner that noisy planes split is a few millimetres, so they stay
+    edges and the box is no cube (its edges are not equal)."""
+    mesh = solids.box(0.226, 0.037, 0.024)
+    rec = sample_record(
+        mesh, builtin_finger("33"), per_face=6, quantise=False, noise=0.0005, seed=2
+    )
+    model = build_model(rec)
+    unsure = tuple(
+        dataclasses.replace(f, normal_uncertainty_deg=6.0) if f.source == "contacts" else f
+        for f in model.faces
+    )
+    model = dataclasses.replace(model, faces=unsure)
+    assert model.polyhedron is not None
+    lengths = model.polyhedron.edge_lengths()
+    sig = edge_uncertainties(model)
+    short = lengths < 0.05  # the end edges: the truth is 2.4 and 3.7 cm
+    assert short.sum() == 8
+    assert (lengths[short] <= 4.0 * sig[short]).any()  # within their uncertainty of none
+    assert (lengths[short] > SPLIT_CORNER_RHO * rec.tip_radius).all()
+    assert not _split_corners(model, 4.0, 0.06).any()
+    assert not equal_edges(model)

@@ -164,6 +164,13 @@ SPOT_RHO = 0.5
 """Tip radii: tip centres this near each other on a face are one spot to the jackknife of
 :func:`spread_bend` (a touch and the slides that stay by it, a probe's touches at one place)."""
 
+SPLIT_CORNER_RHO = 2.0
+"""Tip radii: the longest edge :func:`_split_corners` takes for a corner that noisy planes split
+on its length's uncertainty alone. Four planes that miss one point by their bumps and
+roundings leave an edge of a few millimetres (7.5 mm on a 19 cm octahedron); a face touched
+over a patch a tenth of its size may leave its far edges uncertain by centimetres, and a
+long box's 24 mm end edges, 4 σ long, were taken for split corners and left a cube."""
+
 
 @dataclass(frozen=True)
 class Feature:
@@ -222,7 +229,7 @@ def _uncertainty(model: ObjectModel) -> FloatArray:
         out = []
         for f in faces:
             unc = f.normal_uncertainty_deg
-            m = f.n_contacts
+            m = f.places or f.n_contacts  # independent centres: a touch and its slide are one
             if f.refined and m > 3 and detail > 0.0:
                 own = max(f.residual * math.sqrt(m / (m - 3)), least)  # σ of the fit, m − 3 dof
                 if m <= 4:
@@ -1494,8 +1501,8 @@ def equal_edges(
     whose plane a rough surface tilts by a degree or two lengthens the edges on one side of it
     and shortens those opposite by as much (a 95 mm cube's lateral edges 91.8–97.6 mm under
     a top tilted by 1.7°): their mean keeps the length.
-    An edge no longer than ``sigmas`` σ, or than ``rel_tol`` of the mean edge, is a corner
-    that noisy planes split (four faces of an octahedron meet at each corner, and four noisy
+    An edge no longer than ``sigmas`` σ (and :data:`SPLIT_CORNER_RHO` ρ), or than ``rel_tol``
+    of the mean edge, is a corner that noisy planes split (four faces of an octahedron meet at each corner, and four noisy
     planes meet in no one point), not an edge (:func:`_split_corners`).
 
     False on a model closed by an assumed top (``model.assumed_top``): the lateral edges'
@@ -1534,15 +1541,18 @@ def equal_edges(
 
 def _split_corners(model: ObjectModel, sigmas: float, rel_tol: float) -> NDArray[np.bool_]:
     """(E,) whether each polyhedron edge is a split corner: no longer than ``sigmas`` times its
-    length's uncertainty (:func:`edge_uncertainties`), or than ``rel_tol`` of the mean edge
-    (the tolerance within which lengths count equal), so indistinguishable from
-    none. Where more than three faces meet, noisy planes meet in no one point and leave such
-    an edge; so do exact touches of a rough scan, whose fits report no uncertainty while a
-    bump or a rounded edge tilts a plane by a degree or two."""
+    length's uncertainty (:func:`edge_uncertainties`) and than :data:`SPLIT_CORNER_RHO` tip
+    radii, or than ``rel_tol`` of the mean edge (the tolerance within which lengths count
+    equal), so indistinguishable from none. Where more than three faces meet, noisy planes
+    meet in no one point and leave such an edge; so do exact touches of a rough scan, whose
+    fits report no uncertainty while a bump or a rounded edge tilts a plane by a degree or
+    two."""
     p = _poly(model, "edge_uncertainties")
     lengths = _derived(model, (__name__, current().features, "edge_lengths"), p.edge_lengths)
     least = rel_tol * float(lengths.mean()) if len(lengths) else 0.0
-    return np.asarray(lengths <= np.maximum(sigmas * _edge_sigmas(model), least), dtype=bool)
+    cap = SPLIT_CORNER_RHO * model.record.tip_radius
+    unsure = (lengths <= sigmas * _edge_sigmas(model)) & (lengths <= cap)
+    return np.asarray(unsure | (lengths <= least), dtype=bool)
 
 
 def _face_cycles(

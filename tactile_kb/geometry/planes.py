@@ -195,7 +195,12 @@ class Face:
         ``"contacts"`` or ``"table"`` (the support plane z = 0).
     offset_uncertainty
         Estimated (1σ) uncertainty of ``offset`` (m) at the centre of the face's contacts:
-        the tip centres' scatter about the plane over √(number of contacts); 0 for the table.
+        the tip centres' scatter about the plane over √(number of places); 0 for the table.
+    places
+        How many distinct places its tip centres lie at (:func:`places`: centres within
+        :data:`PLACE_RHO` ρ of each other, on one patch of the surface, count once); its
+        uncertainties count that many independent centres. 0: not counted (the table, an
+        assumed face).
     """
 
     normal: Vec3
@@ -207,6 +212,7 @@ class Face:
     refined: bool
     source: str = "contacts"
     offset_uncertainty: float = 0.0
+    places: int = 0
 
     @property
     def normal_array(self) -> FloatArray:
@@ -684,10 +690,24 @@ def _fold(
     return None if best is None else best[1]
 
 
-def _turn_deg(f: _Fit, sigma: float) -> float:
+def _turn_deg(f: _Fit, sigma: float, spots: int | None = None) -> float:
     """Degrees: the standard error of the normal of the fit ``f`` when its centres scatter by
-    ``sigma`` about its plane (σ over its span times √m)."""
-    return math.degrees(math.atan2(sigma, f.span * math.sqrt(len(f.residuals))))
+    ``sigma`` about its plane (σ over its span times √m, m its centres or the ``spots`` they
+    lie at)."""
+    m = len(f.residuals) if spots is None else spots
+    return math.degrees(math.atan2(sigma, f.span * math.sqrt(max(m, 1))))
+
+
+def _scatter(f: _Fit, spots: int) -> float:
+    """σ of the centres of the fit ``f`` about its plane, which lie at ``spots`` places
+    (:func:`places`): their mean squared residual over the degrees of freedom of the places
+    (three spent on a fitted plane, one on an offset), so that the touches of one patch
+    count once."""
+    m = len(f.residuals)
+    if m == 0:
+        return 0.0
+    dof = spots - 3 if f.refined else spots - 1
+    return math.sqrt(_sse(f) / m * spots / max(dof, 1))
 
 
 def _noise_turn(f: _Fit, noise: float) -> float:
@@ -1102,6 +1122,22 @@ def _spots(c: FloatArray, radius: float, limit: int | None = None) -> int:
         i += 1 + int(later[0])
 
 
+PLACE_RHO = 1.0
+"""Tip radii: tip centres nearer each other than this touched one place of the surface
+(:func:`places`). The tip rests on a patch about its own radius across: the touches of one
+patch (a touch and the slide recorded where it starts, a slide's samples a few millimetres
+apart) ride the same bumps and the same roughness."""
+
+
+def places(centres: FloatArray, rho: float) -> int:
+    """How many distinct places the tip ``centres`` lie at (each centre further than
+    :data:`PLACE_RHO` ρ from every earlier place starts a new one): the independent
+    observations of a face's plane. A face's uncertainties count these, not its contacts: on
+    a scan the touches of one patch share its bumps, and a plane through a few patches is
+    turned by their bumps however often each was touched."""
+    return _spots(np.asarray(centres, dtype=float).reshape(-1, 3), PLACE_RHO * rho)
+
+
 _CUT_DIRECTIONS = 8
 """In-plane directions along which :func:`_two_plane_starts` cuts a group's centres."""
 
@@ -1475,13 +1511,14 @@ def _faces_from_contacts(
     for g in groups:
         f = fit(g)
         m = len(g)
+        k = places(centres[g], rho)
         # the centres' scatter about the plane, never less than the declared noise: a few
         # centres can fit a plane better than their noise by chance
-        sigma = max(math.sqrt(_sse(f) / max(m - 3 if f.refined else m - 1, 1)), noise)
-        if m <= 4:  # three or four centres fit a plane (nearly) exactly: trust the detail
+        sigma = max(_scatter(f, k), noise)
+        if k <= 4:  # three or four places fit a plane (nearly) exactly: trust the detail
             sigma = max(sigma, detail)  # the other faces show
         if f.refined:
-            unc = _turn_deg(f, sigma)
+            unc = _turn_deg(f, sigma, k)
         else:
             spread = float(np.degrees(np.arccos(np.clip(normals[g] @ f.normal, -1, 1))).max())
             unc = max(spread, cone)
@@ -1496,7 +1533,8 @@ def _faces_from_contacts(
                 normal_uncertainty_deg=unc,
                 contacts=tuple(index[np.sort(g)].tolist()),
                 refined=f.refined,
-                offset_uncertainty=sigma / math.sqrt(m),
+                offset_uncertainty=sigma / math.sqrt(k),
+                places=k,
             )
         )
     return out
@@ -2356,9 +2394,10 @@ def refit_past_roundings(
         zone = rounding_zone(centres[idx], poly, plane_of[k], rho, rounding)
         if not zone.any():
             continue
-        fit = _past_rounding(centres[idx], sensors[idx], zone, max(3, (m + 1) // 2), scale)
-        if fit is not None:
-            out[k] = _refitted(f, fit, rho, noise)
+        found = _past_rounding(centres[idx], sensors[idx], zone, max(3, (m + 1) // 2), scale)
+        if found is not None:
+            fit, kept = found
+            out[k] = _refitted(f, fit, rho, noise, places(centres[idx[kept]], rho))
     return tuple(out)
 
 
@@ -2421,13 +2460,14 @@ def segment_distances(points: FloatArray, a: FloatArray, b: FloatArray) -> Float
 
 def _past_rounding(
     centres: FloatArray, sensors: FloatArray, zone: NDArray[np.bool_], least: int, scale: float
-) -> _Fit | None:
+) -> tuple[_Fit, NDArray[np.bool_]] | None:
     """The plane of a face's ``centres`` without those in ``zone`` (near enough to an edge to
-    lie on its rounding) that dip inside it, or None when no such set explains a dip
-    (:func:`refit_past_roundings`); at least ``least`` centres are kept. A set set aside
-    explains a dip when the rest lie on their plane within 4 ``s`` (``s`` the larger of
-    ``scale`` and their robust scatter), none of the set lies outside it by more than 4 ``s``
-    and one lies inside by more; and only when the plane of all the centres misses the kept
+    lie on its rounding) that dip inside it, and which centres it is the plane of; or None
+    when no such set explains a dip (:func:`refit_past_roundings`); at least ``least``
+    centres are kept. A set set aside explains a dip when the rest lie on their plane within
+    4 ``s`` (``s`` the larger of ``scale`` and their robust scatter), none of the set lies
+    outside it by more than 4 ``s`` and one lies inside by more; and only when the plane of
+    all the centres misses the kept
     ones by an RMS above ``scale`` (the noise, at least) and above twice their scatter about
     their own plane (σ with three degrees of freedom spent; so four centres at least): the
     dips turned it, which the noise alone does not.
@@ -2467,10 +2507,12 @@ def _past_rounding(
         if found is not None:
             fit, s = found
             back = zone & (np.abs(centres @ fit.normal - fit.centre_offset) <= 2.0 * s)
+            kept = ~zone
             if back.any():
                 again = _fit(centres[~zone | back], sensors[~zone | back], span)
-                fit = again if again.refined else fit
-            return fit
+                if again.refined:
+                    fit, kept = again, ~zone | back
+            return fit, kept
     keep = np.ones(m, dtype=bool)
     fit = whole
     while zone[keep].any() and int(keep.sum()) > least:
@@ -2489,12 +2531,14 @@ def _past_rounding(
             shallow = keep & zone & (res < -2.0 * s)
             if not shallow.any():
                 break
-            keep[int(np.argmin(np.where(shallow, res, np.inf)))] = False
+            j = int(np.argmin(np.where(shallow, res, np.inf)))
+            keep[j] = False
             trimmed = _fit(centres[keep], sensors[keep], span)
             if not trimmed.refined:
+                keep[j] = True
                 break
             fit = trimmed
-        return fit
+        return fit, keep
     return None
 
 
@@ -2502,19 +2546,19 @@ def _rms(r: FloatArray) -> float:
     return math.sqrt(float((r**2).mean())) if len(r) else 0.0
 
 
-def _refitted(face: Face, fit: _Fit, rho: float, noise: float) -> Face:
-    """``face`` with the plane ``fit`` of some of its centres (all its contacts kept); their
-    scatter is taken as at least the declared ``noise`` (a few centres can fit a plane
-    better than their noise by chance)."""
-    n = len(fit.residuals)
-    sigma = max(math.sqrt(_sse(fit) / max(n - 3, 1)), noise)
+def _refitted(face: Face, fit: _Fit, rho: float, noise: float, spots: int) -> Face:
+    """``face`` with the plane ``fit`` of some of its centres (all its contacts kept), which lie
+    at ``spots`` places (:func:`places`); their scatter is taken as at least the declared
+    ``noise`` (a few centres can fit a plane better than their noise by chance)."""
+    sigma = max(_scatter(fit, spots), noise)
     return Face(
         normal=(float(fit.normal[0]), float(fit.normal[1]), float(fit.normal[2])),
         offset=fit.centre_offset - rho,
         n_contacts=face.n_contacts,
         residual=math.sqrt(float((fit.residuals**2).mean())),
-        normal_uncertainty_deg=math.degrees(math.atan2(sigma, fit.span * math.sqrt(n))),
+        normal_uncertainty_deg=_turn_deg(fit, sigma, spots),
         contacts=face.contacts,
         refined=True,
-        offset_uncertainty=sigma / math.sqrt(n),
+        offset_uncertainty=sigma / math.sqrt(spots),
+        places=face.places,
     )
