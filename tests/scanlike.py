@@ -10,6 +10,8 @@ from __future__ import annotations
 import numpy as np
 import trimesh
 
+from tactile_kb.record import Contact
+
 
 def subdivided(mesh: trimesh.Trimesh, edge: float) -> trimesh.Trimesh:
     """``mesh`` with every triangle split until its edges are at most ``edge`` long."""
@@ -51,3 +53,15 @@ def bumped(
     lift = height * np.exp(-((d / width) ** 2)).max(axis=1)
     out.vertices = out.vertices + lift[:, None] * out.vertex_normals
     return out
+
+
+def roughened(contact: Contact, rng: np.random.Generator, amplitude: float) -> Contact:
+    """``contact`` moved along its face's normal by uniform noise of ±``amplitude``: a touch
+    of a rough face (its relief about the plane), the tip centre and the point alike."""
+    shift = -np.asarray(contact.direction) * rng.uniform(-amplitude, amplitude)
+    return contact.model_copy(
+        update={
+            "centre": tuple(np.asarray(contact.centre) + shift),
+            "point": tuple(np.asarray(contact.point) + shift),
+        }
+    )

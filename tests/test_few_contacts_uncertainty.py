@@ -5,6 +5,7 @@ roughness added to their contacts)."""
 from __future__ import annotations
 
 import numpy as np
+from scanlike import roughened
 
 from tactile_kb import solids
 from tactile_kb.features.builtin import _uncertainty, face_angles, parallelism_table
@@ -35,15 +36,7 @@ def _record() -> tuple[ExplorationRecord, np.ndarray]:
                 continue
             kept.append(c)
             continue
-        shift = -np.asarray(c.direction) * rng.uniform(-ROUGH, ROUGH)
-        kept.append(
-            c.model_copy(
-                update={
-                    "centre": tuple(np.asarray(c.centre) + shift),
-                    "point": tuple(np.asarray(c.point) + shift),
-                }
-            )
-        )
+        kept.append(roughened(c, rng, ROUGH))
     return rec.model_copy(update={"contacts": kept}), -np.asarray(few)
 
 

@@ -5,6 +5,7 @@ sampled, roughened and repeated in place)."""
 from __future__ import annotations
 
 import numpy as np
+from scanlike import roughened
 
 from tactile_kb import solids
 from tactile_kb.geometry.model import build_model
@@ -42,17 +43,7 @@ def _rough_box() -> ExplorationRecord:
     mesh = solids.box(0.09, 0.07, 0.05)
     rec = sample_record(mesh, builtin_finger("33"), per_face=9, quantise=False, noise=0.0, seed=3)
     rng = np.random.default_rng(8)
-    rough = []
-    for c in rec.contacts:
-        shift = -np.asarray(c.direction) * rng.uniform(-ROUGH, ROUGH)
-        rough.append(
-            c.model_copy(
-                update={
-                    "centre": tuple(np.asarray(c.centre) + shift),
-                    "point": tuple(np.asarray(c.point) + shift),
-                }
-            )
-        )
+    rough = [roughened(c, rng, ROUGH) for c in rec.contacts]
     return rec.model_copy(update={"contacts": rough})
 
 

@@ -475,7 +475,7 @@ def _far_from_edges(
     pts = centres[[i for f in faces for i in f.contacts]]
     bound = (pts.mean(axis=0), 3.0 * float(np.ptp(pts, axis=0).max()) + rho)
     try:
-        poly = polyhedron_from_planes(normals, offsets, bound=bound)
+        poly = polyhedron_from_planes(normals, offsets, bound=bound, interior=bound[0])
     except GeometryError:
         return drop
     v = poly.vertices

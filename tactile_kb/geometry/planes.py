@@ -1878,8 +1878,9 @@ def edge_faces(
     pts = centres[[i for f in faces for i in f.contacts]] if len(centres) else centres
     bound = (pts.mean(axis=0), 3.0 * float(np.ptp(pts, axis=0).max()) + rho)
     # A point inside the polyhedron of all kept faces lies inside that of any of them: the
-    # polyhedra below start from it instead of solving a linear programme each.
-    inner: FloatArray | None = None
+    # polyhedra below start from it instead of solving a linear programme each (the first
+    # from the touched points' centre, when it lies deep enough inside).
+    inner: FloatArray = bound[0]
     while True:
         best: int | None = None
         try:
@@ -2249,7 +2250,9 @@ def explained_faces(
             if len(others) < 4:
                 continue
             try:
-                poly = polyhedron_from_planes(normals[others], offsets[others], bound=bound)
+                poly = polyhedron_from_planes(
+                    normals[others], offsets[others], bound=bound, interior=centre
+                )
             except GeometryError:
                 continue  # the others do not close without it: a face
             c = centres[list(faces[k].contacts)]
@@ -2378,7 +2381,7 @@ def refit_past_roundings(
     middle = pts.mean(axis=0)
     bound = (middle, 3.0 * float(np.linalg.norm(pts - middle, axis=1).max()))
     try:
-        poly = polyhedron_from_planes(normals, offsets, bound=bound)
+        poly = polyhedron_from_planes(normals, offsets, bound=bound, interior=middle)
     except GeometryError:
         return tuple(faces)
     plane_of = {which[int(j)]: p for p, j in enumerate(poly.plane_index)}

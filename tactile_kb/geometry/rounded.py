@@ -111,7 +111,7 @@ def _features(
     """Per centre, the feature of ``K`` (the planes ``normals · x ≤ offsets``) nearest it:
     ``(FACE, (j,))``, ``(EDGE, (j, k))`` or ``(CORNER, planes)``; None when ``K`` is open."""
     try:
-        poly = polyhedron_from_planes(normals, offsets, bound=bound)
+        poly = polyhedron_from_planes(normals, offsets, bound=bound, interior=bound[0])
     except GeometryError:
         return None
     return _nearest_features(c, poly)
@@ -433,6 +433,7 @@ def _bound(pts: FloatArray) -> tuple[FloatArray, float]:
 
 def _closed(normals: FloatArray, offsets: FloatArray, pts: FloatArray) -> Polyhedron | None:
     try:
-        return polyhedron_from_planes(normals, offsets, bound=_bound(pts))
+        bound = _bound(pts)
+        return polyhedron_from_planes(normals, offsets, bound=bound, interior=bound[0])
     except GeometryError:
         return None
