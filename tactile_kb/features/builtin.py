@@ -229,7 +229,7 @@ def _uncertainty(model: ObjectModel) -> FloatArray:
         out = []
         for f in faces:
             unc = f.normal_uncertainty_deg
-            m = f.places or f.n_contacts  # independent centres: a touch and its slide are one
+            m = f.places or f.n_contacts  # independent centres: one patch's touches count once
             if f.refined and m > 3 and detail > 0.0:
                 own = max(f.residual * math.sqrt(m / (m - 3)), least)  # σ of the fit, m − 3 dof
                 if m <= 4:
@@ -1502,8 +1502,9 @@ def equal_edges(
     and shortens those opposite by as much (a 95 mm cube's lateral edges 91.8–97.6 mm under
     a top tilted by 1.7°): their mean keeps the length.
     An edge no longer than ``sigmas`` σ (and :data:`SPLIT_CORNER_RHO` ρ), or than ``rel_tol``
-    of the mean edge, is a corner that noisy planes split (four faces of an octahedron meet at each corner, and four noisy
-    planes meet in no one point), not an edge (:func:`_split_corners`).
+    of the mean edge, is a corner that noisy planes split (four faces of an octahedron meet at
+    each corner, and four noisy planes meet in no one point), not an edge
+    (:func:`_split_corners`).
 
     False on a model closed by an assumed top (``model.assumed_top``): the lateral edges'
     true length is unknown."""

@@ -2470,10 +2470,9 @@ def _past_rounding(
     centres are kept. A set set aside explains a dip when the rest lie on their plane within
     4 ``s`` (``s`` the larger of ``scale`` and their robust scatter), none of the set lies
     outside it by more than 4 ``s`` and one lies inside by more; and only when the plane of
-    all the centres misses the kept
-    ones by an RMS above ``scale`` (the noise, at least) and above twice their scatter about
-    their own plane (σ with three degrees of freedom spent; so four centres at least): the
-    dips turned it, which the noise alone does not.
+    all the centres misses the kept ones by an RMS above ``scale`` (the noise, at least) and
+    above twice their scatter about their own plane (σ with three degrees of freedom spent;
+    so four centres at least): the dips turned it, which the noise alone does not.
 
     The whole zone is set aside first, and those of its centres that lie on the plane of the
     rest are given back; when that leaves too few, the zone's deepest centre (below the plane
