@@ -449,6 +449,11 @@ def polyhedron_from_planes(
         ``(centre, radius)``: a vertex further than ``radius`` from ``centre`` means the
         planes close only far from where they were touched (nearly parallel sides of an
         unexplored end), reported as open towards that vertex.
+    interior
+        A point expected inside the polyhedron, where Qhull starts: used when it lies deep
+        enough inside (else the Chebyshev centre is found by a linear programme). Part of the
+        cache's key, unlike ``bound``: callers that pass a bound usually pass its centre too,
+        the middle of where the planes were touched.
 
     Returns
     -------
