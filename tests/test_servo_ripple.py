@@ -1,0 +1,98 @@
+"""Which sensor changes during a slide are ripples of the surface followed.
+
+A rough vertical face touched by the 33-sensor finger often closes two equator sensors at once
+(the face's normal between them) and, over a bump below the equator, a sensor of the ring 30°
+under them. That sensor is a neighbour of the pair's direction, the surface's normal as the
+finger reads it, though it lies further than ``servo.ripple_deg`` from either sensor of the
+pair alone. The angles here are computed from the layout's own directions.
+"""
+
+from __future__ import annotations
+
+import math
+from collections import deque
+
+import numpy as np
+from test_servo import ScriptedWorld
+
+from tactile_kb.settings import current
+from tactile_kb.touch.finger import builtin_finger
+from tactile_kb.touch.servo import Controller, ServoParams, _Follow
+from tactile_kb.touch.world import Motion
+
+FINGER = builtin_finger("33")
+DIRS = FINGER.matrix
+
+
+def _deg(a: np.ndarray, b: np.ndarray) -> float:
+    return math.degrees(
+        math.acos(float(np.clip(a @ b / np.linalg.norm(a) / np.linalg.norm(b), -1, 1)))
+    )
+
+
+def _sensor(azimuth_deg: float, elevation_deg: float) -> int:
+    e, a = math.radians(elevation_deg), math.radians(azimuth_deg)
+    want = np.array([math.cos(e) * math.cos(a), math.cos(e) * math.sin(a), math.sin(e)])
+    k = int(np.argmax(DIRS @ want))
+    assert _deg(DIRS[k], want) < 1e-6
+    return k
+
+
+def _case() -> tuple[tuple[int, int], int, int, int, int]:
+    """The pair, its sensor followed, its other sensor, the sensor 30° under that other one
+    and an equator sensor turned 45° from the pair's direction (a corner)."""
+    a60, a90 = _sensor(60.0, 0.0), _sensor(90.0, 0.0)  # a face whose normal points 75° round
+    pair = (a60, a90)
+    followed = Controller(ScriptedWorld(deque(), finger=FINGER), ServoParams())._follow(pair).sensor
+    other = a90 if followed == a60 else a60
+    below = _sensor(60.0 if other == a60 else 90.0, -30.0)
+    turned = _sensor(120.0 if other == a90 else 30.0, 0.0)
+    return pair, followed, other, below, turned
+
+
+PAIR, FOLLOWED, OTHER, BELOW, TURNED = _case()
+
+
+def _slide_closing(group: tuple[int, ...], closing: int) -> tuple[Controller, Motion, _Follow]:
+    c = Controller(ScriptedWorld(deque(), finger=FINGER), ServoParams())
+    f = c._follow(group)
+    fired = tuple(sorted({*group, closing}))
+    m = Motion(
+        kind="slide",
+        start=(0.0, 0.0, 0.03),
+        end=(0.0, 0.004, 0.03),
+        direction=(0.0, 1.0, 0.0),
+        distance=0.004,
+        event="touch",
+        fired_start=tuple(sorted(group)),
+        fired=fired,
+        closed=(closing,),
+        opened=(),
+        measured=(0.0, 0.004, 0.03),
+    )
+    return c, m, f
+
+
+def test_the_layout_gives_the_case_its_angles() -> None:
+    limit = current().servo.ripple_deg
+    mean = DIRS[list(PAIR)].sum(axis=0)
+    assert _deg(DIRS[BELOW], DIRS[FOLLOWED]) > limit  # 41.4° from the sensor followed
+    assert _deg(DIRS[BELOW], DIRS[OTHER]) < limit  # 30°: the pair's other sensor's neighbour
+    assert _deg(DIRS[BELOW], mean) <= limit  # 33.2° from the normal the pair reads
+    assert _deg(DIRS[TURNED], mean) > limit  # 45°
+
+
+def test_a_sensor_below_the_followed_pair_is_a_ripple() -> None:
+    c, m, f = _slide_closing(PAIR, BELOW)
+    assert c._ripple(m, f)
+
+
+def test_a_face_turned_from_the_pair_is_a_new_touch() -> None:
+    c, m, f = _slide_closing(PAIR, TURNED)
+    assert not c._ripple(m, f)
+
+
+def test_followed_alone_the_sensor_below_its_neighbour_is_a_new_touch() -> None:
+    # one sensor reads the normal as its own direction: 41.4° from BELOW, more than ripple_deg
+    c, m, f = _slide_closing((FOLLOWED,), BELOW)
+    assert not c._ripple(m, f)
