@@ -3,8 +3,9 @@
 A rough vertical face touched by the 33-sensor finger often closes two equator sensors at once
 (the face's normal between them) and, over a bump below the equator, a sensor of the ring 30°
 under them. That sensor is a neighbour of the pair's direction, the surface's normal as the
-finger reads it, though it lies further than ``servo.ripple_deg`` from either sensor of the
-pair alone. The angles here are computed from the layout's own directions.
+finger reads it, though it may lie further than ``servo.ripple_deg`` from the sensor of the
+pair that is followed. A neighbour of the sensor followed stays a ripple too. The angles here
+are computed from the layout's own directions.
 """
 
 from __future__ import annotations
@@ -96,3 +97,15 @@ def test_followed_alone_the_sensor_below_its_neighbour_is_a_new_touch() -> None:
     # one sensor reads the normal as its own direction: 41.4° from BELOW, more than ripple_deg
     c, m, f = _slide_closing((FOLLOWED,), BELOW)
     assert not c._ripple(m, f)
+
+
+def test_a_neighbour_of_the_sensor_followed_stays_a_ripple() -> None:
+    # two sensors of the ring 30° down, at 60° and 90° round, the first followed; the sensor of
+    # the ring 60° down at 45° round is 31.6° from it and 35.3° from the pair's normal
+    lower = (_sensor(60.0, -30.0), _sensor(90.0, -30.0))
+    c, m, f = _slide_closing(lower, _sensor(45.0, -60.0))
+    limit = current().servo.ripple_deg
+    assert f.sensor == lower[0]
+    assert _deg(DIRS[_sensor(45.0, -60.0)], DIRS[f.sensor]) <= limit
+    assert _deg(DIRS[_sensor(45.0, -60.0)], DIRS[list(lower)].sum(axis=0)) > limit
+    assert c._ripple(m, f)
