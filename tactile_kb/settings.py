@@ -166,8 +166,7 @@ class ServoSettings(_Group):
         gt=0,
         lt=90,
         description="Degrees: a sensor closing during a slide while the followed one stays ON, "
-        "this close to it or to the normal the followed sensors read together (a neighbour), is "
-        "a ripple of the same surface, not a new touch.",
+        "this close to it (a neighbour), is a ripple of the same surface, not a new touch.",
     )
     persist_tries: int = Field(
         0,

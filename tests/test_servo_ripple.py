@@ -1,11 +1,11 @@
 """Which sensor changes during a slide are ripples of the surface followed.
 
-A rough vertical face touched by the 33-sensor finger often closes two equator sensors at once
-(the face's normal between them) and, over a bump below the equator, a sensor of the ring 30°
-under them. That sensor is a neighbour of the pair's direction, the surface's normal as the
-finger reads it, though it may lie further than ``servo.ripple_deg`` from the sensor of the
-pair that is followed. A neighbour of the sensor followed stays a ripple too. The angles here
-are computed from the layout's own directions.
+A sensor closing while the followed one stays ON is a ripple when it lies within
+``servo.ripple_deg`` of the sensor followed. Three looser rules were measured and left out
+(docs/benchmarks.md, thirty-ninth round): a neighbour of the normal the followed group reads
+took the contact turning round a sloped side's edge for a ripple, and the contour then ended at
+a blocked slide (``tests/test_rough_top.py``'s frustum). The cases here pin the rule on the
+33-sensor layout; the angles are computed from the layout's own directions.
 """
 
 from __future__ import annotations
@@ -83,11 +83,6 @@ def test_the_layout_gives_the_case_its_angles() -> None:
     assert _deg(DIRS[TURNED], mean) > limit  # 45°
 
 
-def test_a_sensor_below_the_followed_pair_is_a_ripple() -> None:
-    c, m, f = _slide_closing(PAIR, BELOW)
-    assert c._ripple(m, f)
-
-
 def test_a_face_turned_from_the_pair_is_a_new_touch() -> None:
     c, m, f = _slide_closing(PAIR, TURNED)
     assert not c._ripple(m, f)
@@ -109,3 +104,19 @@ def test_a_neighbour_of_the_sensor_followed_stays_a_ripple() -> None:
     assert _deg(DIRS[_sensor(45.0, -60.0)], DIRS[f.sensor]) <= limit
     assert _deg(DIRS[_sensor(45.0, -60.0)], DIRS[list(lower)].sum(axis=0)) > limit
     assert c._ripple(m, f)
+
+
+def test_a_contact_turning_round_towards_the_next_face_is_a_new_touch() -> None:
+    # a sloped side read by a sensor of the ring 30° down and the equator sensor above it, both
+    # 150° round, the lower one followed: at the edge to the next side the contact turns round,
+    # and the equator sensor at 120° closes. It lies 33.3° from the pair's normal but 30° round
+    # from it, further than the pair's own sensors (which do not turn round at all), and 41.4°
+    # from the sensor followed: a new touch, as a straight slide meeting a new face is.
+    side = (_sensor(150.0, -30.0), _sensor(150.0, 0.0))
+    round_ = _sensor(120.0, 0.0)
+    c, m, f = _slide_closing(side, round_)
+    limit = current().servo.ripple_deg
+    assert f.sensor == side[0]
+    assert _deg(DIRS[round_], DIRS[f.sensor]) > limit
+    assert _deg(DIRS[round_], DIRS[list(side)].sum(axis=0)) <= limit
+    assert not c._ripple(m, f)

@@ -1521,18 +1521,13 @@ class Controller:
     def _ripple(self, m: Motion, f: _Follow) -> bool:
         """Whether a sensor closing during a slide is a ripple of the surface followed (a scan's
         vertex noise or bump turning the contact a little), not a new surface: the followed
-        sensor stays ON, every sensor that closed is a neighbour (within :data:`RIPPLE_DEG`)
-        of it or of r0 (the surface's normal as the followed group reads it: two equator
-        sensors that closed together read a normal between them, and the sensor 30° under
-        either is its neighbour, as a bump under the equator closes it, though 41° from the
-        other), and the sensors ON now point within :data:`RIDE_DEG` of r0 on average. A new
-        face met in a straight slide turns the contact by its whole angle."""
+        sensor stays ON, every sensor that closed is a neighbour of it (within
+        :data:`RIPPLE_DEG`), and the sensors ON now point within :data:`RIDE_DEG` of r0 on
+        average. A new face met in a straight slide turns the contact by its whole angle."""
         if f.sensor not in m.fired or not m.closed:
             return False
         cos_n = math.cos(math.radians(current().servo.ripple_deg))
-        closed = self._dirs[list(m.closed)]
-        near = (closed @ self._dirs[f.sensor] >= cos_n) | (closed @ f.r0 >= cos_n)
-        if not bool(near.all()):
+        if not bool((self._dirs[list(m.closed)] @ self._dirs[f.sensor] >= cos_n).all()):
             return False
         mean = _unit(self._dirs[list(m.fired)].sum(axis=0))
         return float(mean @ f.r0) >= math.cos(math.radians(current().servo.ride_deg))
