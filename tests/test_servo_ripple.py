@@ -98,11 +98,12 @@ def test_a_neighbour_of_the_sensor_followed_stays_a_ripple() -> None:
     # two sensors of the ring 30° down, at 60° and 90° round, the first followed; the sensor of
     # the ring 60° down at 45° round is 31.6° from it and 35.3° from the pair's normal
     lower = (_sensor(60.0, -30.0), _sensor(90.0, -30.0))
-    c, m, f = _slide_closing(lower, _sensor(45.0, -60.0))
+    between = _sensor(45.0, -60.0)
+    c, m, f = _slide_closing(lower, between)
     limit = current().servo.ripple_deg
     assert f.sensor == lower[0]
-    assert _deg(DIRS[_sensor(45.0, -60.0)], DIRS[f.sensor]) <= limit
-    assert _deg(DIRS[_sensor(45.0, -60.0)], DIRS[list(lower)].sum(axis=0)) > limit
+    assert _deg(DIRS[between], DIRS[f.sensor]) <= limit
+    assert _deg(DIRS[between], DIRS[list(lower)].sum(axis=0)) > limit
     assert c._ripple(m, f)
 
 
