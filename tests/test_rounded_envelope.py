@@ -9,14 +9,19 @@ touches of one rounding.
 
 from __future__ import annotations
 
+import gzip
 import math
+from pathlib import Path
 
 import numpy as np
 import pytest
 
 from tactile_kb import solids
+from tactile_kb.geometry import rounded
 from tactile_kb.geometry.model import build_model
 from tactile_kb.geometry.rounded import RoundedFit, fit_rounded, unexplained
+from tactile_kb.pipeline import classify_record
+from tactile_kb.record import ExplorationRecord
 from tactile_kb.settings import override
 from tactile_kb.touch.finger import builtin_finger
 from tactile_kb.touch.synthetic import sample_record
@@ -196,3 +201,41 @@ def test_a_sharp_solids_model_keeps_every_face() -> None:
     assert len(with_it.faces) == len(without.faces) == 6
     with override(geometry={"rounded_fit_sigmas": 0.0}):
         assert len(build_model(rec).faces) == 6
+
+
+# A stepper's record of a scan-like pyramid (benchmarks/bench_real.py --draw 3, level 2, exact
+# contacts): pyramid(4, 0.1446, 0.3) turned 99.3° about z, its edges rounded by 6 % of the
+# shortest edge. Three touches near the apex made a plane of their own, which held the fitted
+# rounding radius near 1 mm; the envelope without it missed them at the prefilter's three radii.
+APEX_RECORD = Path(__file__).parent / "data" / "records" / "pyramid4-level2-draw3.json.gz"
+
+
+def _apex_record() -> ExplorationRecord:
+    return ExplorationRecord.model_validate_json(gzip.decompress(APEX_RECORD.read_bytes()))
+
+
+def _true_side_normals() -> np.ndarray:
+    ideal = solids.rotate_about_z(solids.pyramid(4, 0.1446, 0.3), 99.3)
+    n = np.unique(np.round(ideal.face_normals, 6), axis=0)
+    return n[n[:, 2] > 0]
+
+
+def test_a_lightly_touched_rounding_plane_is_explained_after_a_refit() -> None:
+    model = build_model(_apex_record())
+    sides = np.asarray([f.normal for f in model.faces if f.source == "contacts"])
+    truth = _true_side_normals()
+    assert len(truth) == 4
+    # one face per true side, each within 3° of it, and nothing else
+    assert len(sides) == 4
+    angles = np.degrees(np.arccos(np.clip(sides @ truth.T, -1.0, 1.0)))
+    assert sorted(angles.argmin(axis=1).tolist()) == [0, 1, 2, 3]
+    assert float(angles.min(axis=1).max()) < 3.0
+    assert classify_record(_apex_record(), rules="polyhedra").decision.label == "pyramid"
+
+
+def test_without_the_refit_the_apex_plane_stays(monkeypatch: pytest.MonkeyPatch) -> None:
+    # the same record with no plane counted as lightly touched: the prefilter alone keeps
+    # the apex plane, a fifth side (the answer was a frustum)
+    monkeypatch.setattr(rounded, "LIGHT_FRACTION", 0.0)
+    model = build_model(_apex_record())
+    assert sum(f.source == "contacts" for f in model.faces) == 5

@@ -51,6 +51,15 @@ MAX_EVALUATIONS = 30
 """Evaluations of the residuals per round of :func:`fit_rounded` (a few Gauss-Newton steps
 from the faces' own planes, a start within a few degrees)."""
 
+LIGHT_FRACTION = 0.5
+"""A plane touched fewer than this × the median plane's touches is touched in passing, as a
+rounding is, not explored as a face: when :data:`PREFILTER` rules it out, a quick refit
+without it (:data:`QUICK_EVALUATIONS`) asks again (:func:`unexplained`)."""
+
+QUICK_EVALUATIONS = 8
+"""Evaluations of the one-round refit that asks again for a lightly touched plane: enough to
+move the radius and the neighbouring planes most of the way."""
+
 FACE, EDGE, CORNER = 0, 1, 2
 
 _Packed = tuple[
@@ -200,11 +209,13 @@ def fit_rounded(
     max_radius: float,
     floor: float,
     rounds: int = ROUNDS,
+    evaluations: int = MAX_EVALUATIONS,
 ) -> RoundedFit | None:
     """Fit the rounded envelope to ``centres`` from the tip-centre planes ``normals · x =
     offsets`` (a start: each face's own fit); planes flagged ``fixed`` (the table) stay.
-    ``r`` lies in ``[0, max_radius]``; ``floor`` (m) is the least scale of the robust loss.
-    None when the planes do not close."""
+    ``r`` lies in ``[0, max_radius]``; ``floor`` (m) is the least scale of the robust loss;
+    ``rounds`` fits, each of at most ``evaluations`` evaluations of the residuals, with the
+    centres' features assigned anew between them. None when the planes do not close."""
     m = len(normals)
     fixed_a = np.zeros(m, dtype=bool) if fixed is None else np.asarray(fixed, dtype=bool)
     free = np.flatnonzero(~fixed_a)
@@ -246,7 +257,7 @@ def fit_rounded(
                 loss="soft_l1",
                 f_scale=scale,
                 bounds=(lo, hi),
-                max_nfev=MAX_EVALUATIONS,
+                max_nfev=evaluations,
                 ftol=1e-6,
                 xtol=1e-6,
             )
@@ -307,7 +318,13 @@ def unexplained(
     * the other touches' RMS, clipped at 3 scales, grows by at most ``growth`` ×.
 
     A plane whose touches lie further than :data:`PREFILTER` × that limit from the envelope
-    with it, its own plane left out and nothing refitted, is not fitted again.
+    with it, its own plane left out and nothing refitted, is not fitted again, unless it is
+    touched lightly (fewer touches than :data:`LIGHT_FRACTION` × the median free plane's):
+    a rounding's plane holds the fitted radius small, and the envelope without it misses
+    its touches until the radius and the neighbouring planes move. Such a plane is refitted
+    without it once quickly (one round of :data:`QUICK_EVALUATIONS`), then fully when its
+    touches lie within the prefilter's limit of that; and since the refit moved the envelope
+    to them, more than half of its touches (not half) must then lie on roundings.
     """
     keep = list(range(len(normals)))
     fixed_a = np.asarray(fixed, dtype=bool)
@@ -327,7 +344,7 @@ def unexplained(
         wide = [w for w in widths if w >= min_width] or widths
         return rounding * float(min(wide)) if wide else 0.0
 
-    def fit(planes: list[int], cap: float) -> RoundedFit | None:
+    def fit(planes: list[int], cap: float, quick: bool = False) -> RoundedFit | None:
         return fit_rounded(
             pts,
             normals[planes],
@@ -336,7 +353,12 @@ def unexplained(
             fixed=fixed_a[planes],
             max_radius=cap,
             floor=floor,
+            rounds=1 if quick else ROUNDS,
+            evaluations=QUICK_EVALUATIONS if quick else MAX_EVALUATIONS,
         )
+
+    def limit(fitted: RoundedFit) -> float:
+        return PREFILTER * sigmas * max(fitted.scale, floor)
 
     def near(k: int, fitted: RoundedFit, cap: float) -> bool:
         """Whether ``k``'s touches lie within ``PREFILTER`` × ``sigmas`` scales of the fitted
@@ -345,15 +367,29 @@ def unexplained(
         at = [p for p, j in enumerate(keep) if j != k]
         c = centres[list(groups[k])]
         n, e = fitted.normals[at], fitted.offsets[at]
-        limit = PREFILTER * sigmas * max(fitted.scale, floor)
         for r in (fitted.radius, 0.5 * cap, cap):
             feats = _features(c, n, e - rho - r, bound)
             if feats is None:
                 return True  # no judgement without a closed envelope: refit
             res = _residuals(c, n, e, r, rho, _pack(feats))
-            if float(np.abs(res).max()) <= limit:
+            if float(np.abs(res).max()) <= limit(fitted):
                 return True
         return False
+
+    def light(k: int) -> bool:
+        """Whether ``k`` is touched fewer than :data:`LIGHT_FRACTION` × the median free plane
+        of those kept (its refit near enough is then asked again)."""
+        touches = [len(groups[j]) for j in keep if not fixed_a[j]]
+        return bool(touches) and len(groups[k]) < LIGHT_FRACTION * float(np.median(touches))
+
+    def near_refitted(k: int, fitted: RoundedFit, rest: list[int], cap: float) -> bool:
+        """Whether ``k``'s touches lie within ``PREFILTER`` × ``sigmas`` scales (of
+        ``fitted``, the envelope with ``k``) of the envelope quickly refitted without it."""
+        quick = fit(rest, cap, quick=True)
+        if quick is None:
+            return False
+        mine = np.asarray([pos[i] for i in groups[k]], dtype=np.intp)
+        return float(np.abs(quick.residuals[mine]).max()) <= limit(fitted)
 
     cap = radius_cap(keep)
     current = fit(keep, cap) if cap is not None else None
@@ -368,8 +404,13 @@ def unexplained(
             if len(rest) < 4:
                 continue
             cap = radius_cap(rest)
-            if cap is None or not near(k, current, cap):
+            if cap is None:
                 continue
+            refitted = False  # near only once the envelope without k was refitted
+            if not near(k, current, cap):
+                if not (light(k) and near_refitted(k, current, rest, cap)):
+                    continue
+                refitted = True
             trial = fit(rest, cap)
             if trial is None:
                 continue
@@ -382,7 +423,7 @@ def unexplained(
             ok = _wide(trial, rest, mine, rho, min_width) and (
                 float(np.abs(res).max()) <= sigmas * s
                 and abs(float(res.mean())) <= 2.0 * s / math.sqrt(len(res))
-                and float(np.mean(trial.kinds[mine] != FACE)) >= 0.5
+                and _on_roundings(float(np.mean(trial.kinds[mine] != FACE)), strict=refitted)
                 and after <= growth * max(before, floor)
             )
             if ok:
@@ -393,6 +434,12 @@ def unexplained(
                 break
         if not found:
             return removed, current
+
+
+def _on_roundings(fraction: float, *, strict: bool) -> bool:
+    """Whether ``fraction`` of a plane's touches on roundings explains it: at least half;
+    more than half (``strict``) when only a refit brought the envelope to them."""
+    return fraction > 0.5 if strict else fraction >= 0.5
 
 
 def _wide(
