@@ -4,7 +4,8 @@ all the tip centres, and the faces it explains.
 Ground truth is the geometry built here: a box ``K`` and the tip centres a tip of radius ρ
 puts on ``K ⊕ B(ρ + r)`` (on the faces, on the quarter cylinders of the edges' roundings),
 planes turned and moved off the true ones by known amounts, and a plane fitted through the
-touches of one rounding.
+touches of one rounding; and a saved exploration of a scan-like pyramid, its model judged
+against the planes of the ideal pyramid it was made from.
 """
 
 from __future__ import annotations
