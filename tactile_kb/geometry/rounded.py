@@ -382,14 +382,14 @@ def unexplained(
         touches = [len(groups[j]) for j in keep if not fixed_a[j]]
         return bool(touches) and len(groups[k]) < LIGHT_FRACTION * float(np.median(touches))
 
-    def near_refitted(k: int, fitted: RoundedFit, rest: list[int], cap: float) -> bool:
-        """Whether ``k``'s touches lie within ``PREFILTER`` × ``sigmas`` scales (of
-        ``fitted``, the envelope with ``k``) of the envelope quickly refitted without it."""
+    def near_refitted(
+        mine: NDArray[np.intp], fitted: RoundedFit, rest: list[int], cap: float
+    ) -> bool:
+        """Whether the touches ``mine`` (indices into ``pts``) lie within ``PREFILTER`` ×
+        ``sigmas`` scales (of ``fitted``, the envelope with their plane) of the envelope
+        quickly refitted on the planes ``rest``."""
         quick = fit(rest, cap, quick=True)
-        if quick is None:
-            return False
-        mine = np.asarray([pos[i] for i in groups[k]], dtype=np.intp)
-        return float(np.abs(quick.residuals[mine]).max()) <= limit(fitted)
+        return quick is not None and float(np.abs(quick.residuals[mine]).max()) <= limit(fitted)
 
     cap = radius_cap(keep)
     current = fit(keep, cap) if cap is not None else None
@@ -406,15 +406,15 @@ def unexplained(
             cap = radius_cap(rest)
             if cap is None:
                 continue
+            mine = np.asarray([pos[i] for i in groups[k]], dtype=np.intp)
             refitted = False  # near only once the envelope without k was refitted
             if not near(k, current, cap):
-                if not (light(k) and near_refitted(k, current, rest, cap)):
+                if not (light(k) and near_refitted(mine, current, rest, cap)):
                     continue
                 refitted = True
             trial = fit(rest, cap)
             if trial is None:
                 continue
-            mine = np.asarray([pos[i] for i in groups[k]], dtype=np.intp)
             others = np.setdiff1d(np.arange(len(idx)), mine)
             before = _robust_rms(current.residuals[others], current.scale)
             after = _robust_rms(trial.residuals[others], trial.scale)
