@@ -4,7 +4,8 @@ all the tip centres, and the faces it explains.
 Ground truth is the geometry built here: a box ``K`` and the tip centres a tip of radius ρ
 puts on ``K ⊕ B(ρ + r)`` (on the faces, on the quarter cylinders of the edges' roundings),
 planes turned and moved off the true ones by known amounts, and a plane fitted through the
-touches of one rounding; and a saved exploration of a scan-like pyramid, its model judged
+touches of one rounding; the residuals' central differences, against which their analytic
+derivatives are checked; and a saved exploration of a scan-like pyramid, its model judged
 against the planes of the ideal pyramid it was made from.
 """
 
@@ -240,3 +241,47 @@ def test_without_the_refit_the_apex_plane_stays(monkeypatch: pytest.MonkeyPatch)
     monkeypatch.setattr(rounded, "LIGHT_FRACTION", 0.0)
     model = build_model(_apex_record())
     assert sum(f.source == "contacts" for f in model.faces) == 5
+
+
+def test_the_residuals_derivatives_match_finite_differences() -> None:
+    # centres on the faces, on the roundings of all twelve edges and near the eight corners
+    # of a box whose planes are turned a little: every kind of feature, each derivative
+    # against central differences of the residuals
+    rng = np.random.default_rng(7)
+    normals = np.array([_turned(n, 3.0, k) for k, n in enumerate(NORMALS)])
+    r = 0.004
+    offsets = _k_offsets() + RHO + r
+    d = rng.normal(size=(300, 3))
+    c = d / np.linalg.norm(d, axis=1)[:, None] * (HALF + RHO + r) * 1.3
+    signs = rng.choice([-1.0, 1.0], size=(60, 3))
+    c = np.vstack([c, signs * (HALF + 0.006) + 0.001 * rng.normal(size=(60, 3))])
+    bound = rounded._bound(c)
+    feats = rounded._features(c, normals, offsets - RHO - r, bound)
+    assert feats is not None
+    packed = rounded._pack(feats)
+    assert set(packed[0].tolist()) == {rounded.FACE, rounded.EDGE, rounded.CORNER}
+    _, grads, by_r = rounded._evaluate(c, normals, offsets, r, RHO, packed, gradients=True)
+    by_n = np.zeros((len(c), len(normals), 3))
+    by_e = np.zeros((len(c), len(normals)))
+    for rows, planes, gn, ge in grads:
+        by_n[rows, planes] += gn
+        by_e[rows, planes] += ge
+
+    def res(n: np.ndarray, e: np.ndarray, radius: float) -> np.ndarray:
+        return rounded._residuals(c, n, e, radius, RHO, packed)
+
+    h = 1e-7
+    for j in range(len(normals)):
+        for a in range(3):
+            up, down = normals.copy(), normals.copy()
+            up[j, a] += h
+            down[j, a] -= h
+            numeric = (res(up, offsets, r) - res(down, offsets, r)) / (2 * h)
+            np.testing.assert_allclose(by_n[:, j, a], numeric, atol=1e-5)
+        up_e, down_e = offsets.copy(), offsets.copy()
+        up_e[j] += h
+        down_e[j] -= h
+        numeric = (res(normals, up_e, r) - res(normals, down_e, r)) / (2 * h)
+        np.testing.assert_allclose(by_e[:, j], numeric, atol=1e-5)
+    numeric = (res(normals, offsets, r + h) - res(normals, offsets, r - h)) / (2 * h)
+    np.testing.assert_allclose(by_r, numeric, atol=1e-5)

@@ -11,12 +11,13 @@ fitted as one here.
 
 :func:`fit_rounded` fits the planes of ``K`` and the shared radius ``r`` to the tip centres
 by a robust least-squares fit (scipy's ``least_squares`` with the ``soft_l1`` loss, an
-M-estimator): each centre's residual is its distance from ``K`` less ``R``, measured to the
-nearest face, edge or corner of ``K`` (re-assigned between rounds). :func:`unexplained`
-then asks of each face in turn whether the model *without* it explains its touches as well
-as with it: a rounding's face does (its touches lie on the rounding of the edge its two
-neighbours make), a face of the object does not (without it ``K`` overshoots: a corner
-that is not there, its touches inside the model by that corner's depth).
+M-estimator, and an analytic Jacobian): each centre's residual is its distance from ``K``
+less ``R``, measured to the nearest face, edge or corner of ``K`` (re-assigned between
+rounds). :func:`unexplained` then asks of each face in turn whether the model *without* it
+explains its touches as well as with it: a rounding's face does (its touches lie on the
+rounding of the edge its two neighbours make), a face of the object does not (without it
+``K`` overshoots: a corner that is not there, its touches inside the model by that corner's
+depth).
 
 Only faces that support the object (no touch beyond them: a convex object's faces) make
 ``K``; a non-convex object's hollows are left to :mod:`tactile_kb.geometry.blocks`.
@@ -178,25 +179,81 @@ def _residuals(
 ) -> FloatArray:
     """Each centre's distance from its feature of ``K`` less ``R = ρ + r`` (``K``'s planes are
     the centres' planes moved in by ``R``)."""
+    return _evaluate(c, normals, offsets, r, rho, features, gradients=False)[0]
+
+
+_Gradients = list[tuple[NDArray[np.intp], NDArray[np.intp], FloatArray, FloatArray]]
+"""Per block of residuals: their rows, the plane each depends on, and the residuals'
+derivatives by that plane's normal (rows × 3) and by its offset (rows)."""
+
+
+def _evaluate(
+    c: FloatArray,
+    normals: FloatArray,
+    offsets: FloatArray,
+    r: float,
+    rho: float,
+    features: _Packed,
+    *,
+    gradients: bool,
+) -> tuple[FloatArray, _Gradients, FloatArray]:
+    """:func:`_residuals`, and with ``gradients`` their derivatives: by each plane they
+    depend on (normal and offset, see :data:`_Gradients`) and by ``r`` (per centre)."""
     big = rho + r
     d = offsets - big  # K's offsets
     kinds, fi, fj, corner = features
     out = np.empty(len(c))
+    grads: _Gradients = []
+    by_r = np.zeros(len(c))
     if len(fi):
-        sel = kinds == FACE
-        out[sel] = np.einsum("ij,ij->i", c[sel], normals[fi[sel]]) - offsets[fi[sel]]
-        sel = kinds == EDGE
-        if sel.any():
-            nj, nk = normals[fi[sel]], normals[fj[sel]]
-            a = np.einsum("ij,ij->i", c[sel], nj) - d[fi[sel]]
-            b = np.einsum("ij,ij->i", c[sel], nk) - d[fj[sel]]
+        rows = np.flatnonzero(kinds == FACE)
+        out[rows] = np.einsum("ij,ij->i", c[rows], normals[fi[rows]]) - offsets[fi[rows]]
+        if gradients and len(rows):
+            grads.append((rows, fi[rows], c[rows], -np.ones(len(rows))))
+        rows = np.flatnonzero(kinds == EDGE)
+        if len(rows):
+            j, k = fi[rows], fj[rows]
+            nj, nk, cr = normals[j], normals[k], c[rows]
+            a = np.einsum("ij,ij->i", cr, nj) - d[j]
+            b = np.einsum("ij,ij->i", cr, nk) - d[k]
             cos = np.einsum("ij,ij->i", nj, nk)
             sin2 = np.maximum(1.0 - cos * cos, 1e-9)
-            out[sel] = np.sqrt(np.maximum(a * a + b * b - 2.0 * a * b * cos, 0.0) / sin2) - big
+            dist = np.sqrt(np.maximum(a * a + b * b - 2.0 * a * b * cos, 0.0) / sin2)
+            out[rows] = dist - big
+            if gradients:
+                # dist² = (a² + b² − 2ab·cos) / sin²: its derivatives by a, b and cos
+                w = 1.0 / np.maximum(sin2 * dist, 1e-12)
+                by_a = (a - b * cos) * w
+                by_b = (b - a * cos) * w
+                by_cos = (dist * dist * cos - a * b) * w
+                grads.append((rows, j, by_a[:, None] * cr + by_cos[:, None] * nk, -by_a))
+                grads.append((rows, k, by_b[:, None] * cr + by_cos[:, None] * nj, -by_b))
+                by_r[rows] = by_a + by_b - 1.0
+    # a corner's point v = argmin |N v − d| depends on its planes only: one solve per corner
+    at: dict[tuple[int, ...], list[int]] = {}
     for i, ix in corner:
-        v, *_ = np.linalg.lstsq(normals[list(ix)], d[list(ix)], rcond=None)
-        out[i] = float(np.linalg.norm(c[i] - v)) - big
-    return out
+        at.setdefault(ix, []).append(i)
+    for ix, members in at.items():
+        planes = np.asarray(ix, dtype=np.intp)
+        n = normals[planes]
+        v, *_ = np.linalg.lstsq(n, d[planes], rcond=None)
+        rows = np.asarray(members, dtype=np.intp)
+        diff = c[rows] - v
+        length = np.linalg.norm(diff, axis=1)
+        out[rows] = length - big
+        if gradients:
+            # dv = G (dNᵀ ρ + Nᵀ (dd − dN v)), G = (NᵀN)⁺, ρ = d − N v; d(res) = −û · dv
+            g = np.linalg.pinv(n.T @ n)
+            u = diff / np.maximum(length, 1e-12)[:, None]
+            ug = u @ g  # (rows, 3): û G
+            lack = d[planes] - n @ v
+            for p, plane in enumerate(planes):
+                along = ug @ n[p]  # û G n_p
+                # by n_p in direction t: −û G (t ρ_p − n_p (t · v))
+                by_n = -lack[p] * ug + along[:, None] * v[None, :]
+                grads.append((rows, np.full(len(rows), plane), by_n, -along))
+            by_r[rows] = ug @ n.sum(axis=0) - 1.0
+    return out, grads, by_r
 
 
 def fit_rounded(
@@ -224,15 +281,44 @@ def fit_rounded(
     u, v = _tangents(n0)
     bound = _bound(centres)
 
+    k = len(free)
+    column = np.full(m, -1, dtype=np.intp)
+    column[free] = np.arange(k)
+
     def unpack(x: FloatArray) -> tuple[FloatArray, FloatArray, float]:
+        return unpack_norms(x)[:3]
+
+    def unpack_norms(x: FloatArray) -> tuple[FloatArray, FloatArray, float, FloatArray]:
         n = n0.copy()
         e = e0.copy()
-        k = len(free)
         a, b, off = x[:k], x[k : 2 * k], x[2 * k : 3 * k]
         n[free] = n0[free] + a[:, None] * u[free] + b[:, None] * v[free]
-        n[free] /= np.linalg.norm(n[free], axis=1)[:, None]
+        norms = np.ones(m)
+        norms[free] = np.linalg.norm(n[free], axis=1)
+        n[free] /= norms[free, None]
         e[free] = e0[free] + off
-        return n, e, float(x[-1])
+        return n, e, float(x[-1]), norms
+
+    def jacobian(x: FloatArray, fs: _Packed) -> FloatArray:
+        """The residuals' derivatives by ``x``: by each free plane's two tilts (along ``u``
+        and ``v``, the normal then made unit), its offset, and ``r``."""
+        n, e, r, norms = unpack_norms(x)
+        _, grads, by_r = _evaluate(centres, n, e, r, rho, fs, gradients=True)
+        # the unit normal's derivative by a tilt t: (t − n (n · t)) / |n0 + a u + b v|
+        du = (u - n * np.einsum("ij,ij->i", n, u)[:, None]) / norms[:, None]
+        dv = (v - n * np.einsum("ij,ij->i", n, v)[:, None]) / norms[:, None]
+        jac = np.zeros((len(centres), 3 * k + 1))
+        for rows, planes, by_n, by_e in grads:
+            q = column[planes]
+            sel = q >= 0
+            if not sel.any():
+                continue
+            rr, qq, pp, gn = rows[sel], q[sel], planes[sel], by_n[sel]
+            jac[rr, qq] += np.einsum("ij,ij->i", gn, du[pp])
+            jac[rr, k + qq] += np.einsum("ij,ij->i", gn, dv[pp])
+            jac[rr, 2 * k + qq] += by_e[sel]
+        jac[:, -1] = by_r
+        return jac
 
     x = np.zeros(3 * len(free) + 1)
     lo = np.full(len(x), -np.inf)
@@ -249,11 +335,15 @@ def fit_rounded(
             n, e, r = unpack(y)
             return _residuals(centres, n, e, r, rho, fs)
 
+        def jac(y: FloatArray, fs: _Packed = fs) -> FloatArray:
+            return jacobian(y, fs)
+
         scale = max(floor, _robust_scale(fun(x)))
         try:
             sol = least_squares(
                 fun,
                 x,
+                jac=jac,
                 loss="soft_l1",
                 f_scale=scale,
                 bounds=(lo, hi),
