@@ -4,9 +4,10 @@ all the tip centres, and the faces it explains.
 Ground truth is the geometry built here: a box ``K`` and the tip centres a tip of radius ρ
 puts on ``K ⊕ B(ρ + r)`` (on the faces, on the quarter cylinders of the edges' roundings),
 planes turned and moved off the true ones by known amounts, and a plane fitted through the
-touches of one rounding; the residuals' central differences, against which their analytic
-derivatives are checked; and a saved exploration of a scan-like pyramid, its model judged
-against the planes of the ideal pyramid it was made from.
+touches of one rounding (or of two, on a larger box rounded by 15 mm); a regular octagonal
+prism; the residuals' central differences, against which their analytic derivatives are
+checked; and a saved exploration of a scan-like pyramid, its model judged against the planes
+of the ideal pyramid it was made from.
 """
 
 from __future__ import annotations
@@ -21,8 +22,9 @@ import pytest
 from tactile_kb import solids
 from tactile_kb.geometry import rounded
 from tactile_kb.geometry.model import build_model
+from tactile_kb.geometry.polyhedron import face_width, polyhedron_from_planes
 from tactile_kb.geometry.rounded import RoundedFit, fit_rounded, unexplained
-from tactile_kb.pipeline import classify_record
+from tactile_kb.pipeline import classify, classify_record
 from tactile_kb.record import ExplorationRecord
 from tactile_kb.settings import override
 from tactile_kb.touch.finger import builtin_finger
@@ -243,6 +245,92 @@ def test_without_the_refit_the_apex_plane_stays(monkeypatch: pytest.MonkeyPatch)
     assert sum(f.source == "contacts" for f in model.faces) == 5
 
 
+def _box_with_strips(
+    half: np.ndarray, r: float, edges: list[tuple[int, int]], seed: int = 0
+) -> tuple[np.ndarray, list[list[int]], np.ndarray, np.ndarray]:
+    """Tip centres on ``K ⊕ B(ρ + r)``, ``K`` the box of half-sizes ``half``: 12 on each
+    face and 12 on the rounding of each of ``edges`` (pairs of indices into ``NORMALS``, two
+    perpendicular faces); the planes: the faces' true ones, then per edge the least-squares
+    plane of its rounding's touches (a strip along the edge)."""
+    rng = np.random.default_rng(seed)
+    big = RHO + r
+    pts: list[np.ndarray] = []
+    groups: list[list[int]] = [[] for _ in NORMALS]
+    for j, n in enumerate(NORMALS):
+        for _ in range(12):
+            p = n * (np.abs(n) @ half + big)
+            for a in (a for a in range(3) if n[a] == 0):
+                p[a] = rng.uniform(-0.7, 0.7) * half[a]
+            groups[j].append(len(pts))
+            pts.append(p)
+    normals, offsets = list(NORMALS), list(np.abs(NORMALS) @ half + big)
+    for a, b in edges:
+        na, nb = NORMALS[a], NORMALS[b]
+        along = np.cross(na, nb)
+        axis = na * (np.abs(na) @ half) + nb * (np.abs(nb) @ half)
+        group = []
+        for _ in range(12):
+            t = rng.uniform(0.15, 0.85) * math.pi / 2
+            s = rng.uniform(-0.7, 0.7) * float(np.abs(along) @ half)
+            group.append(len(pts))
+            pts.append(axis + big * (math.cos(t) * na + math.sin(t) * nb) + s * along)
+        groups.append(group)
+        n = (na + nb) / math.sqrt(2.0)
+        normals.append(n)
+        offsets.append(float(np.mean([pts[i] @ n for i in group])))
+    return np.asarray(pts), groups, np.asarray(normals), np.asarray(offsets)
+
+
+def test_wide_strips_of_a_large_rounding_are_explained() -> None:
+    # a 30 × 25 × 20 cm box, two of its edges rounded by 15 mm and each rounding's touches a
+    # plane of its own: strips wider than 2 ρ, so the narrowest face of the model (the other
+    # strip) would cap r at a tenth of a strip's width, far under 15 mm; the faces the strip
+    # joins (20-30 cm wide) bound it instead
+    half, r = np.array([0.15, 0.125, 0.10]), 0.015
+    c, groups, normals, offsets = _box_with_strips(half, r, [(0, 2), (1, 4)])
+    poly = polyhedron_from_planes(normals, offsets - RHO)
+    strips = [f for f in range(len(poly.faces)) if poly.plane_index[f] >= 6]
+    widths = [face_width(poly, f) for f in strips]
+    assert len(strips) == 2
+    assert min(widths) > 2 * RHO
+    assert 0.1 * max(widths) < 0.5 * r
+    removed, fit = _explained(c, groups, normals, offsets)
+    assert sorted(removed) == [6, 7]
+    assert fit is not None
+    assert fit.radius == pytest.approx(r, rel=0.05)
+    np.testing.assert_allclose(fit.offsets, np.abs(NORMALS) @ half + RHO + r, atol=2e-4)
+
+
+def test_a_real_face_between_wide_faces_is_not_explained() -> None:
+    # the same box with a true 45° bevel face 4 cm wide on one edge (no rounding): the bound
+    # of the faces it joins lets r grow, but without the bevel the box's corner lies 1 cm
+    # outside its touches
+    half = np.array([0.15, 0.125, 0.10])
+    cut = (NORMALS[0] + NORMALS[2]) / math.sqrt(2.0)
+    corner = NORMALS[0] * half[0] + NORMALS[2] * half[1]
+    depth = 0.02  # a 45° bevel 4 cm wide lies half its width from the edge it cuts
+    bevel = float(corner @ cut) - depth
+    middle = corner - depth * cut  # the middle of the bevel, on the box's mid-height
+    rng = np.random.default_rng(5)
+    normals = np.vstack([NORMALS, cut])
+    offsets_k = np.append(np.abs(NORMALS) @ half, bevel)
+    pts, groups = [], [[] for _ in normals]
+    along = np.cross(NORMALS[0], NORMALS[2])
+    for j, n in enumerate(normals):
+        for _ in range(12):
+            if j == 6:
+                base = middle + np.cross(along, n) * rng.uniform(-0.012, 0.012)
+                base = base + along * rng.uniform(-0.7, 0.7) * half[2]
+            else:
+                base = n * offsets_k[j]
+                for a in (a for a in range(3) if n[a] == 0):
+                    base[a] = rng.uniform(-0.6, 0.6) * half[a]
+            groups[j].append(len(pts))
+            pts.append(base + RHO * n)
+    removed, _ = _explained(np.asarray(pts), groups, normals, offsets_k + RHO)
+    assert removed == []
+
+
 def test_the_residuals_derivatives_match_finite_differences() -> None:
     # centres on the faces, on the roundings of all twelve edges and near the eight corners
     # of a box whose planes are turned a little: every kind of feature, each derivative
@@ -285,3 +373,43 @@ def test_the_residuals_derivatives_match_finite_differences() -> None:
         np.testing.assert_allclose(by_e[:, j], numeric, atol=1e-5)
     numeric = (res(normals, offsets, r + h) - res(normals, offsets, r - h)) / (2 * h)
     np.testing.assert_allclose(by_r, numeric, atol=1e-5)
+
+
+@pytest.mark.parametrize("light", [None, math.inf])
+def test_a_small_cylinders_facets_stay_under_noise(
+    light: float | None, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    # a 12.7 mm cylinder touched with 0.5 mm of noise: eight facets, evenly touched. The
+    # quick refit asked only of planes touched at most as often as the median keeps them
+    # all (curved); asked of every plane, it makes one a rounding of its neighbours (a prism)
+    if light is not None:
+        monkeypatch.setattr(rounded, "LIGHT_FRACTION", light)
+    result = classify(solids.cylinder(0.0127, 0.0648), rules="polyhedra", noise=0.0005, seed=0)
+    assert result.decision.label == ("curved" if light is None else "prism")
+
+
+def test_a_strips_radius_is_bounded_by_the_faces_it_joins() -> None:
+    # the 30 × 25 × 20 cm box grown by r = 15 mm, its +x/+y edge cut by a rounding's strip:
+    # the faces across the strip's long sides are +x and +y, each 23 cm wide (the box's
+    # height, 20 cm, and r on either side)
+    half, r = np.array([0.15, 0.125, 0.10]), 0.015
+    _, _, normals, offsets = _box_with_strips(half, r, [(0, 2)])
+    poly = polyhedron_from_planes(normals, offsets - RHO)
+    assert rounded._joined_width(poly, 6) == pytest.approx(2 * (half[2] + r), abs=1e-9)
+    # the top is wider than half the faces across its long sides (±y): no strip
+    assert rounded._joined_width(poly, 4) == 0.0
+
+
+def test_a_facet_as_wide_as_its_neighbours_is_no_strip() -> None:
+    # a regular octagonal prism 10 cm tall, its sides 2 cm wide: each side's long sides
+    # meet sides as wide as itself, a curved object's facets, not a rounding's strip
+    side = 0.02
+    apothem = side / (2 * math.tan(math.pi / 8))
+    angles = np.arange(8) * math.pi / 4
+    normals = np.vstack(
+        [np.column_stack([np.cos(angles), np.sin(angles), np.zeros(8)]), [[0, 0, 1], [0, 0, -1]]]
+    )
+    offsets = np.append(np.full(8, apothem), [0.05, 0.05])
+    poly = polyhedron_from_planes(normals, offsets)
+    assert [face_width(poly, f) for f in range(8)] == pytest.approx([side] * 8, abs=1e-9)
+    assert all(rounded._joined_width(poly, k) == 0.0 for k in range(8))

@@ -52,14 +52,22 @@ MAX_EVALUATIONS = 30
 """Evaluations of the residuals per round of :func:`fit_rounded` (a few Gauss-Newton steps
 from the faces' own planes, a start within a few degrees)."""
 
-LIGHT_FRACTION = 0.5
-"""A plane touched fewer than this × the median plane's touches is touched in passing, as a
-rounding is, not explored as a face: when :data:`PREFILTER` rules it out, a quick refit
-without it (:data:`QUICK_EVALUATIONS`) asks again (:func:`unexplained`)."""
+LIGHT_FRACTION = 1.0
+"""A plane touched at most this × the median plane's touches may be a rounding's, touched in
+passing (a face of the object is explored): when :data:`PREFILTER` rules it out, a quick
+refit without it (:data:`QUICK_EVALUATIONS`) asks again (:func:`unexplained`). Asking it of
+every plane, the more often touched ones too, made three small cylinders' facets roundings
+(``bench_accuracy.py``, 0.5 mm of noise)."""
 
 QUICK_EVALUATIONS = 8
 """Evaluations of the one-round refit that asks again for a lightly touched plane: enough to
 move the radius and the neighbouring planes most of the way."""
+
+STRIP_WIDTH = 0.5
+"""A face is a rounding's strip, whose radius the two faces across its long sides bound
+(:func:`_joined_width`), only when at most this × as wide as the narrower of them: a curved
+object's facet is about as wide as its neighbours (a 14.3 mm cylinder's 11 mm facet between
+facets 21 and 23 mm wide), and each facet dropped widens the next."""
 
 FACE, EDGE, CORNER = 0, 1, 2
 
@@ -398,7 +406,9 @@ def unexplained(
     by ρ); planes flagged ``fixed`` (the table) are not fitted. ``groups[j]`` are the indices
     (into ``centres``) of plane ``j``'s touches. A plane is explained when, with the envelope
     fitted again without it to all the touches, a dropped face's too (``r`` at most
-    ``rounding`` × the narrowest width of the object's faces at least ``min_width`` wide):
+    ``rounding`` × the narrowest width of the object's faces at least ``min_width`` wide, or
+    × the wider of the two faces across the plane's two longest sides, if more: see
+    :func:`_joined_width`):
 
     * every one of its touches lies within ``sigmas`` × the robust scale of the fit with it
       (at least ``floor``) of the envelope, and their mean within 2 scales/√m (a face of the
@@ -409,9 +419,9 @@ def unexplained(
 
     A plane whose touches lie further than :data:`PREFILTER` × that limit from the envelope
     with it, its own plane left out and nothing refitted, is not fitted again, unless it is
-    touched lightly (fewer touches than :data:`LIGHT_FRACTION` × the median free plane's):
-    a rounding's plane holds the fitted radius small, and the envelope without it misses
-    its touches until the radius and the neighbouring planes move. Such a plane is refitted
+    touched lightly (at most :data:`LIGHT_FRACTION` × the median free plane's touches): a
+    rounding's plane holds the fitted radius small, and the envelope without it misses its
+    touches until the radius and the neighbouring planes move. Such a plane is refitted
     without it once quickly (one round of :data:`QUICK_EVALUATIONS`), then fully when its
     touches lie within the prefilter's limit of that; and since the refit moved the envelope
     to them, more than half of its touches (not half) must then lie on roundings.
@@ -467,10 +477,10 @@ def unexplained(
         return False
 
     def light(k: int) -> bool:
-        """Whether ``k`` is touched fewer than :data:`LIGHT_FRACTION` × the median free plane
+        """Whether ``k`` is touched at most :data:`LIGHT_FRACTION` × the median free plane
         of those kept (its refit near enough is then asked again)."""
         touches = [len(groups[j]) for j in keep if not fixed_a[j]]
-        return bool(touches) and len(groups[k]) < LIGHT_FRACTION * float(np.median(touches))
+        return bool(touches) and len(groups[k]) <= LIGHT_FRACTION * float(np.median(touches))
 
     def near_refitted(
         mine: NDArray[np.intp], fitted: RoundedFit, rest: list[int], cap: float
@@ -488,6 +498,7 @@ def unexplained(
     removed: list[int] = []
     while True:
         order = sorted((k for k in candidates if k in keep), key=lambda k: (len(groups[k]), k))
+        whole = _closed(normals[keep], offsets[keep] - rho, pts)
         found = False
         for k in order:
             rest = [j for j in keep if j != k]
@@ -496,6 +507,7 @@ def unexplained(
             cap = radius_cap(rest)
             if cap is None:
                 continue
+            cap = max(cap, rounding * _joined_width(whole, keep.index(k)))
             mine = np.asarray([pos[i] for i in groups[k]], dtype=np.intp)
             refitted = False  # near only once the envelope without k was refitted
             if not near(k, current, cap):
@@ -524,6 +536,35 @@ def unexplained(
                 break
         if not found:
             return removed, current
+
+
+def _joined_width(poly: Polyhedron | None, plane: int) -> float:
+    """The width of the wider of the two faces the face of ``plane`` (an index into the
+    planes ``poly`` was made of) meets along its two longest sides, when that face is a strip
+    between them (at most :data:`STRIP_WIDTH` × as wide as the narrower); else 0.
+
+    A rounding's plane is a long strip along the edge it rounds: the faces across its long
+    sides are the two the edge joins, and they bound that edge's radius. The narrowest face
+    of the whole model is no bound when other roundings' strips are still in it (a strip 2 cm
+    wide would cap a 2 cm radius at 2 mm); the narrower of the two is often a face those
+    strips have cut down."""
+    if poly is None:
+        return 0.0
+    mine = [f for f in range(len(poly.faces)) if poly.plane_index[f] == plane]
+    if not mine:
+        return 0.0
+    sides = sorted(
+        (
+            (float(np.linalg.norm(poly.vertices[a] - poly.vertices[b])), g if h == mine[0] else h)
+            for (a, b), (g, h) in zip(poly.edges, poly.edge_faces, strict=True)
+            if mine[0] in (g, h)
+        ),
+        reverse=True,
+    )
+    if len(sides) < 2:
+        return 0.0
+    joined = sorted(face_width(poly, g) for _, g in sides[:2])
+    return joined[1] if face_width(poly, mine[0]) <= STRIP_WIDTH * joined[0] else 0.0
 
 
 def _on_roundings(fraction: float, *, strict: bool) -> bool:
