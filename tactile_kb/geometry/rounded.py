@@ -52,12 +52,13 @@ MAX_EVALUATIONS = 30
 """Evaluations of the residuals per round of :func:`fit_rounded` (a few Gauss-Newton steps
 from the faces' own planes, a start within a few degrees)."""
 
-LIGHT_FRACTION = 1.0
-"""A plane touched at most this × the median plane's touches may be a rounding's, touched in
-passing (a face of the object is explored): when :data:`PREFILTER` rules it out, a quick
-refit without it (:data:`QUICK_EVALUATIONS`) asks again (:func:`unexplained`). Asking it of
-every plane, the more often touched ones too, made three small cylinders' facets roundings
-(``bench_accuracy.py``, 0.5 mm of noise)."""
+LIGHT_FRACTION = 0.5
+"""A plane touched fewer than this × the median plane's touches is touched in passing, as a
+rounding is, not explored as a face: when :data:`PREFILTER` rules it out, a quick refit
+without it (:data:`QUICK_EVALUATIONS`) asks again (:func:`unexplained`). So is a rounding's
+strip (:func:`_joined_width`) touched at most as often as the median plane. Asking it of
+every plane touched at most that often made a thin heptagonal prism's facet a rounding
+under noise; of every plane, three small cylinders' facets (``bench_accuracy.py``)."""
 
 QUICK_EVALUATIONS = 8
 """Evaluations of the one-round refit that asks again for a lightly touched plane: enough to
@@ -419,9 +420,10 @@ def unexplained(
 
     A plane whose touches lie further than :data:`PREFILTER` × that limit from the envelope
     with it, its own plane left out and nothing refitted, is not fitted again, unless it is
-    touched lightly (at most :data:`LIGHT_FRACTION` × the median free plane's touches): a
-    rounding's plane holds the fitted radius small, and the envelope without it misses its
-    touches until the radius and the neighbouring planes move. Such a plane is refitted
+    touched lightly (fewer touches than :data:`LIGHT_FRACTION` × the median free plane's,
+    or, a strip between two wider faces, at most as many): a rounding's plane holds the
+    fitted radius small, and the envelope without it misses its touches until the radius
+    and the neighbouring planes move. Such a plane is refitted
     without it once quickly (one round of :data:`QUICK_EVALUATIONS`), then fully when its
     touches lie within the prefilter's limit of that; and since the refit moved the envelope
     to them, more than half of its touches (not half) must then lie on roundings.
@@ -476,11 +478,15 @@ def unexplained(
                 return True
         return False
 
-    def light(k: int) -> bool:
-        """Whether ``k`` is touched at most :data:`LIGHT_FRACTION` × the median free plane
-        of those kept (its refit near enough is then asked again)."""
+    def light(k: int, strip: bool) -> bool:
+        """Whether ``k`` is touched fewer than :data:`LIGHT_FRACTION` × the median free plane
+        of those kept, or, a ``strip``, at most as often as that median (its refit near
+        enough is then asked again)."""
         touches = [len(groups[j]) for j in keep if not fixed_a[j]]
-        return bool(touches) and len(groups[k]) <= LIGHT_FRACTION * float(np.median(touches))
+        if not touches:
+            return False
+        median = float(np.median(touches))
+        return len(groups[k]) < LIGHT_FRACTION * median or (strip and len(groups[k]) <= median)
 
     def near_refitted(
         mine: NDArray[np.intp], fitted: RoundedFit, rest: list[int], cap: float
@@ -507,11 +513,12 @@ def unexplained(
             cap = radius_cap(rest)
             if cap is None:
                 continue
-            cap = max(cap, rounding * _joined_width(whole, keep.index(k)))
+            joined = _joined_width(whole, keep.index(k))
+            cap = max(cap, rounding * joined)
             mine = np.asarray([pos[i] for i in groups[k]], dtype=np.intp)
             refitted = False  # near only once the envelope without k was refitted
             if not near(k, current, cap):
-                if not (light(k) and near_refitted(mine, current, rest, cap)):
+                if not (light(k, joined > 0) and near_refitted(mine, current, rest, cap)):
                     continue
                 refitted = True
             trial = fit(rest, cap)
