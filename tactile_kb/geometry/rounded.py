@@ -407,9 +407,9 @@ def unexplained(
     by ρ); planes flagged ``fixed`` (the table) are not fitted. ``groups[j]`` are the indices
     (into ``centres``) of plane ``j``'s touches. A plane is explained when, with the envelope
     fitted again without it to all the touches, a dropped face's too (``r`` at most
-    ``rounding`` × the narrowest width of the object's faces at least ``min_width`` wide, or
-    × the wider of the two faces across the plane's two longest sides, if more: see
-    :func:`_joined_width`):
+    ``rounding`` × the narrowest width of the object's faces at least ``min_width`` wide, or,
+    when the plane is a strip between the two faces across its long sides and that is more,
+    × the wider of them: see :func:`_joined_width`):
 
     * every one of its touches lies within ``sigmas`` × the robust scale of the fit with it
       (at least ``floor``) of the envelope, and their mean within 2 scales/√m (a face of the
@@ -421,12 +421,12 @@ def unexplained(
     A plane whose touches lie further than :data:`PREFILTER` × that limit from the envelope
     with it, its own plane left out and nothing refitted, is not fitted again, unless it is
     touched lightly (fewer touches than :data:`LIGHT_FRACTION` × the median free plane's,
-    or, a strip between two wider faces, at most as many): a rounding's plane holds the
-    fitted radius small, and the envelope without it misses its touches until the radius
-    and the neighbouring planes move. Such a plane is refitted
-    without it once quickly (one round of :data:`QUICK_EVALUATIONS`), then fully when its
-    touches lie within the prefilter's limit of that; and since the refit moved the envelope
-    to them, more than half of its touches (not half) must then lie on roundings.
+    or, for a strip between two wider faces, at most the median's): a rounding's plane holds
+    the fitted radius small, and the envelope without it misses its touches until the radius
+    and the neighbouring planes move. Such a plane is refitted without it once quickly (one
+    round of :data:`QUICK_EVALUATIONS`), then fully when its touches lie within the
+    prefilter's limit of that; and since the refit moved the envelope to them, more than
+    half of its touches (not half) must then lie on roundings.
     """
     keep = list(range(len(normals)))
     fixed_a = np.asarray(fixed, dtype=bool)
