@@ -294,10 +294,8 @@ def fit_rounded(
     column = np.full(m, -1, dtype=np.intp)
     column[free] = np.arange(k)
 
-    def unpack(x: FloatArray) -> tuple[FloatArray, FloatArray, float]:
-        return unpack_norms(x)[:3]
-
-    def unpack_norms(x: FloatArray) -> tuple[FloatArray, FloatArray, float, FloatArray]:
+    def unpack(x: FloatArray) -> tuple[FloatArray, FloatArray, float, FloatArray]:
+        """The planes, ``r`` and each normal's length before it was made unit."""
         n = n0.copy()
         e = e0.copy()
         a, b, off = x[:k], x[k : 2 * k], x[2 * k : 3 * k]
@@ -311,7 +309,7 @@ def fit_rounded(
     def jacobian(x: FloatArray, fs: _Packed) -> FloatArray:
         """The residuals' derivatives by ``x``: by each free plane's two tilts (along ``u``
         and ``v``, the normal then made unit), its offset, and ``r``."""
-        n, e, r, norms = unpack_norms(x)
+        n, e, r, norms = unpack(x)
         _, grads, by_r = _evaluate(centres, n, e, r, rho, fs, gradients=True)
         # the unit normal's derivative by a tilt t: (t − n (n · t)) / |n0 + a u + b v|
         du = (u - n * np.einsum("ij,ij->i", n, u)[:, None]) / norms[:, None]
@@ -329,7 +327,11 @@ def fit_rounded(
         jac[:, -1] = by_r
         return jac
 
-    x = np.zeros(3 * len(free) + 1)
+    def residuals(x: FloatArray, fs: _Packed) -> FloatArray:
+        n, e, r, _ = unpack(x)
+        return _residuals(centres, n, e, r, rho, fs)
+
+    x = np.zeros(3 * k + 1)
     lo = np.full(len(x), -np.inf)
     hi = np.full(len(x), np.inf)
     lo[-1], hi[-1] = 0.0, max(max_radius, 1e-9)
@@ -339,20 +341,13 @@ def fit_rounded(
         return None
     for _ in range(rounds):
         fs = _pack(feats)
-
-        def fun(y: FloatArray, fs: _Packed = fs) -> FloatArray:
-            n, e, r = unpack(y)
-            return _residuals(centres, n, e, r, rho, fs)
-
-        def jac(y: FloatArray, fs: _Packed = fs) -> FloatArray:
-            return jacobian(y, fs)
-
-        scale = max(floor, _robust_scale(fun(x)))
+        scale = max(floor, _robust_scale(residuals(x, fs)))
         try:
             sol = least_squares(
-                fun,
+                residuals,
                 x,
-                jac=jac,
+                jac=jacobian,
+                args=(fs,),
                 loss="soft_l1",
                 f_scale=scale,
                 bounds=(lo, hi),
@@ -363,14 +358,14 @@ def fit_rounded(
         except np.linalg.LinAlgError:
             return None
         x = sol.x
-        n, e, r = unpack(x)
+        n, e, r, _ = unpack(x)
         new = _features(centres, n, e - rho - r, bound)
         if new is None:
             return None
         if new == feats:
             break
         feats = new
-    n, e, r = unpack(x)
+    n, e, r, _ = unpack(x)
     packed = _pack(feats)
     res = _residuals(centres, n, e, r, rho, packed)
     kinds, fi, fj, _ = packed
