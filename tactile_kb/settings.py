@@ -175,6 +175,14 @@ class ServoSettings(_Group):
         "twice as far, before the contour ends (0: a blocked slide ends it, as in the paper; 3 "
         "goes round rough scans).",
     )
+    blind_rise: float = Field(
+        0.5,
+        ge=0,
+        le=1,
+        description="Tip radii: a contour's motion blocked where no sensor fires (a rough face's "
+        "bump met above the sensors' cones) is tried again this much and twice this much above "
+        "the layer (0: the blind block stands, as in the paper).",
+    )
 
 
 class ExploreSettings(_Group):

@@ -11,6 +11,7 @@ from tactile_kb import completion, solids
 from tactile_kb.completion import corner_juts, corner_probes
 from tactile_kb.geometry.model import build_model
 from tactile_kb.record import ExplorationRecord
+from tactile_kb.settings import override
 from tactile_kb.touch.finger import builtin_finger
 from tactile_kb.touch.stepper import StepperExplorer
 from tactile_kb.touch.synthetic import sample_record
@@ -106,14 +107,16 @@ def test_every_corner_of_a_lying_prism_lies_on_the_object() -> None:
     assert rec.ending == "closed", rec.notes
 
 
-def _sides(corners: int, monkeypatch: pytest.MonkeyPatch) -> list[int]:
+def _sides(corners: int, monkeypatch: pytest.MonkeyPatch, rise: float = 0.0) -> list[int]:
     """The directions (degrees, mod 45) of the modelled sides of a scan-like octagonal prism
-    (perturbed at level 2) explored with at most ``corners`` corner probes."""
+    (perturbed at level 2) explored with at most ``corners`` corner probes, a blind block
+    tried again ``rise`` tip radii higher (``servo.blind_rise``; 0: it ends the contour)."""
     from tactile_kb.perturb import perturb
 
     monkeypatch.setattr(completion, "CORNER_PROBES", corners)
     mesh = perturb(solids.rotate_about_z(solids.prism(8, 0.0793, 0.0396), 245.8), 2, seed=0)
-    rec = completion.completing(StepperExplorer()).explore(mesh, seed=0)
+    with override(servo={"blind_rise": rise}):
+        rec = completion.completing(StepperExplorer()).explore(mesh, seed=0)
     poly = build_model(rec).polyhedron
     assert poly is not None
     sides = [n for n in poly.normals if abs(float(n[2])) < 0.3]
@@ -123,13 +126,14 @@ def _sides(corners: int, monkeypatch: pytest.MonkeyPatch) -> list[int]:
 def test_a_scan_like_prism_gets_the_sides_its_contour_missed(
     monkeypatch: pytest.MonkeyPatch,
 ) -> None:
-    """A scan-like octagonal prism: its contour stops early, some sides are never touched,
-    and the other sides' planes close the envelope in corners where the object is not.
-    Without corner probes the model has 4 of its 8 sides; with them, the probes at those
-    corners touch missing sides, and the model has more, every one of them a side of the
-    octagon. (Which sides, and how many, follows the exploration's path: before the
-    completion's probes kept clear of a rounding's reach, a variant of this exploration,
-    its blocked slides ending the layers, found all 8.)"""
+    """A scan-like octagonal prism: its contour stops early (at a blind block, with the rise
+    over it turned off), some sides are never touched, and the other sides' planes close the
+    envelope in corners where the object is not. Without corner probes the model has 4 of its
+    8 sides; with them, the probes at those corners touch missing sides, and the model has
+    more, every one of them a side of the octagon. (Which sides, and how many, follows the
+    exploration's path: before the completion's probes kept clear of a rounding's reach, a
+    variant of this exploration, its blocked slides ending the layers, found all 8; with the
+    rise, the contour alone finds all 8.)"""
     probes = completion.CORNER_PROBES
     without = _sides(0, monkeypatch)
     assert len(without) == 4, without
@@ -138,3 +142,5 @@ def test_a_scan_like_prism_gets_the_sides_its_contour_missed(
     # one direction mod 45°: the octagon's (within the perturbation's 5°)
     spread = max(with_corners) - min(with_corners)
     assert min(spread, 45 - spread) <= 5, with_corners
+    # tried again higher, the blind block no longer ends the contour: every side is touched
+    assert len(_sides(0, monkeypatch, rise=0.5)) == 8

@@ -39,6 +39,7 @@ DOCUMENTED: dict[str, dict[str, float | str]] = {
         "ride_deg": 20.0,
         "ripple_deg": 35.0,
         "persist_tries": 0,
+        "blind_rise": 0.5,
     },
     "explore": {
         "noise_warn_fraction": 0.2,

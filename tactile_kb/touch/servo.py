@@ -28,7 +28,9 @@
   ripples (back off, step on, press back); a slide still blocked without a sensor change
   backs off, steps on and searches back as the cycle does, and re-acquires the surface
   (setting ``servo.persist_tries`` > 0): then it is never the end of the exploration, only
-  the layer's motion budget is.
+  the layer's motion budget is. A motion blocked where no sensor fires (a bump met above the
+  sensors' cones) is tried again higher, within a tip radius of the layer
+  (``servo.blind_rise``, :meth:`Controller._over_blind`).
 * **Edges are not surfaces.** A touch whose slide rolls off at once (within ``edge_slide``)
   touched an edge or a vertex; its contact is dropped from the record, unless such touches
   come three or more in a row (a curved surface is all edges to a sliding tip). A layer
@@ -422,6 +424,7 @@ class Controller:
         self._risen: list[FloatArray] = []  # followed directions risen along in this layer
         self._looked: list[FloatArray] = []  # faces looked under (their press), this layer
         self._next_z: float | None = None  # the height of the next layer, if one is planned
+        self._layer_z: float | None = None  # the height of the layer being contoured
         self._top_under: float | None = None  # a top met just under the layer (its height)
         self._lowered = False  # a layer was lowered under a top once
         self._layer_motions = 0
@@ -643,6 +646,7 @@ class Controller:
                 last = above or index + 1 >= self.params.max_layers
                 self._risen, self._looked = [], []
                 self._next_z = None if last else z + self.z_step
+                self._layer_z = z
                 closed, pos, follow = self._contour(pos, follow, last=last)
                 layer_path = self.path[start_path - 1 if start_path else 0 :]
                 self._finish_layer(index, z, layer_path, closed)
@@ -695,7 +699,7 @@ class Controller:
                 pos, follow = nxt
                 z = float(pos[2])
                 index += 1
-            self._layer = None
+            self._layer, self._layer_z = None, None
             if self.params.probe:
                 self._phase = "probe"
                 _SideProbes(self).run(_centre(top_contacts))
@@ -1468,9 +1472,12 @@ class Controller:
             fwd = self._move_on(here, t, scale * step)
             here = np.asarray(fwd.end, dtype=float)
             hit: Motion | None = None
-            if fwd.event == "blocked":  # a wall no sensor feels ahead: not an irregularity
-                return None
-            if fwd.event == "touch":
+            if fwd.event == "blocked":  # no sensor feels what is ahead: a bump above them?
+                hit = self._over_blind(here, t, scale * step - fwd.distance)
+                if hit is None:
+                    return None  # a wall: not an irregularity
+                here = np.asarray(hit.end, dtype=float)
+            elif fwd.event == "touch":
                 hit = fwd
             elif fwd.event == "none":
                 press = self._move(here, towards, scale * 2.0 * self.bump + p.l2)
@@ -1614,6 +1621,11 @@ class Controller:
             if m.event == "blocked":
                 blind = True
                 self._note(f"blind contact (no sensor fired) at {_fmt(m.end)}")
+                over = self._over_blind(pos, direction, length - m.distance) if p.comply else None
+                if over is not None:
+                    nf = self._follow(over.closed)
+                    self._record(over, nf, "touch")
+                    return np.asarray(over.end, dtype=float), nf
             elif m.event == "limit":
                 self._note(f"the workspace ends at {_fmt(m.end)}")
                 return None
@@ -1627,6 +1639,36 @@ class Controller:
                 f"no contact after the l1-l2-l3 cycle at z = {pos[2]:.4f} m: the object has at "
                 f"least one dimension smaller than l2 = {p.l2:g} m"
             )
+        return None
+
+    def _over_blind(self, pos: FloatArray, direction: FloatArray, length: float) -> Motion | None:
+        """A motion of the contour blocked where no sensor fires: on a rough face, a bump met by
+        the tip above its sensors' cones (a blocked slide's re-acquisition, a leg of the
+        cycle). The finger backs off 2 ``bump`` and tries the rest of the motion again at the
+        layer's height (when an earlier try left it above), then ``servo.blind_rise`` and
+        twice that (tip radii) above it, each try gone back when it touches nothing. Returns
+        the touch it made, the finger where it touched (None: nothing touched, the finger
+        back at ``pos``)."""
+        start = np.asarray(pos, dtype=float)
+        way = np.asarray(direction, dtype=float)
+        base = self._layer_z if self._layer_z is not None else float(start[2])
+        rise = current().servo.blind_rise * self.rho
+        if rise <= 0:
+            return None
+        for height in (base, base + rise, base + 2.0 * rise):
+            if abs(height - float(start[2])) < 0.05 * self.rho:
+                continue
+            with _Look(self, start) as look:
+                back = look.go(-way, 2.0 * self.bump, rigid=True)
+                if back.event != "none":
+                    continue
+                dz = height - float(look.here[2])
+                if look.go(_Z if dz > 0 else -_Z, abs(dz), rigid=True).event != "none":
+                    continue
+                m = look.go(way, length + back.distance + self.bump, rigid=True)
+                if m.event == "touch" and m.closed:
+                    look.legs.clear()  # the finger stays where it touched
+                    return m
         return None
 
     def _retrace(self, pos: FloatArray, legs: list[tuple[FloatArray, float]]) -> FloatArray:
