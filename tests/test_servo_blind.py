@@ -9,14 +9,13 @@ from __future__ import annotations
 
 import pytest
 from scanlike import jittered
-from test_servo_persist import sides_touched
+from test_servo_persist import A, B, C, sides_touched
 
 from tactile_kb import settings, solids
 from tactile_kb.record import ExplorationRecord
 from tactile_kb.touch.servo import ServoParams
 from tactile_kb.touch.stepper import StepperExplorer
 
-A, B, C = 0.08, 0.06, 0.05  # as test_servo_persist's boxes, whose sides it checks
 BLIND_END = "met the object only where no sensor"
 
 
