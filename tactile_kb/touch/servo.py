@@ -23,7 +23,11 @@
   a pyramid, loses contact on every step). A face overhanging the finger stops it going up:
   it steps away from the face, goes up, and searches back. In the last plane (the next one
   would be over the top) the contour is closed without touching the first surface again:
-  when the surface before it ends where the layer began.
+  when the surface before it ends where the layer began. With ``comply``, a touch closes a
+  layer only once its tip centres have turned :data:`HALF_DEG` round the object, and a
+  contour that no touch closed although it went round once more (:data:`ROUND_DEG`: on a
+  cylinder's facets every loss of contact is found again beyond a dent, a slide contact) is
+  closed where it passes its first surface's start, before its motion budget runs out.
 * **Persistence (``comply``).** A finger under force control rides over a scan's bumps and
   ripples (back off, step on, press back); a slide still blocked without a sensor change
   backs off, steps on and searches back as the cycle does, and re-acquires the surface
@@ -109,6 +113,23 @@ PERSIST_TRIES = DEFAULTS.servo.persist_tries
 """How often a blocked slide's re-acquisition (:meth:`Controller._persist`) backs off and steps
 on, each time twice as far (0.8, 1.6, 3.2 tip radii), before the contour ends."""
 
+
+ROUND_DEG = 360.0 + 345.0
+"""Degrees: a layer's contour whose tip centres have turned this far round the object
+(counter-clockwise, :class:`_Turning`), once round and nearly once more, without a touch on its
+first surface closing it, is closed where it passes that surface's start
+(:meth:`Controller._gone_round`). On a cylinder's or a sphere's facets every loss of contact is
+found again beyond a dent (a slide contact), so the paper's closing touch never comes and the
+contour went round until the layer's motion budget ran out (four times round a 64-sided
+cylinder). A contour the paper's touch closes within that is left as it was."""
+
+HALF_DEG = 180.0
+"""Degrees: a layer's contour is closed by a touch on a surface it already followed
+(:meth:`Controller._on_first`, :meth:`Controller._back_on`) only once its tip centres have
+turned this far round the object. A simple closed contour turns 360° in all, and by the time
+it meets its first surface again at least 360° less its last corner's turn (240° round a
+triangle); on a rough side a touch a few millimetres from the layer's start, before the contour
+went anywhere, is a bump of the first surface, not the contour come round."""
 
 UNDER_LOOKS = 2
 """How many rims of one side face, per layer, :meth:`Controller._under_edge` looks under (a rough
@@ -425,6 +446,7 @@ class Controller:
         self._looked: list[FloatArray] = []  # faces looked under (their press), this layer
         self._next_z: float | None = None  # the height of the next layer, if one is planned
         self._layer_z: float | None = None  # the height of the layer being contoured
+        self._turning: _Turning | None = None  # how far the layer's contour has turned
         self._top_under: float | None = None  # a top met just under the layer (its height)
         self._lowered = False  # a layer was lowered under a top once
         self._layer_motions = 0
@@ -549,6 +571,8 @@ class Controller:
             orientation=(self.orientation.tilt_deg, self.orientation.turn_deg),
         )
         self.contacts.append(c)
+        if self._turning is not None and self._phase == "layers":
+            self._turning.add(c.centre)
         return c
 
     def record(self, *, complete: bool) -> ExplorationRecord:
@@ -647,6 +671,7 @@ class Controller:
                 self._risen, self._looked = [], []
                 self._next_z = None if last else z + self.z_step
                 self._layer_z = z
+                self._turning = _Turning(np.asarray(self.contacts[-1].centre[:2]), self.bump)
                 closed, pos, follow = self._contour(pos, follow, last=last)
                 layer_path = self.path[start_path - 1 if start_path else 0 :]
                 self._finish_layer(index, z, layer_path, closed)
@@ -699,7 +724,7 @@ class Controller:
                 pos, follow = nxt
                 z = float(pos[2])
                 index += 1
-            self._layer, self._layer_z = None, None
+            self._layer, self._layer_z, self._turning = None, None, None
             if self.params.probe:
                 self._phase = "probe"
                 _SideProbes(self).run(_centre(top_contacts))
@@ -1083,10 +1108,17 @@ class Controller:
         return t / norm
 
     def _slide_sampled(
-        self, pos: FloatArray, direction: FloatArray, f: _Follow, length: float
+        self,
+        pos: FloatArray,
+        direction: FloatArray,
+        f: _Follow,
+        length: float,
+        *,
+        until: Callable[[FloatArray], bool] | None = None,
     ) -> tuple[Motion, float]:
         """Slide up to ``length`` along the surface under ``f``, recording a ``"slide"`` contact
         every :attr:`spacing`; the last motion (not recorded) and the distance travelled.
+        The slide also stops at a contact where ``until`` holds (that motion is recorded).
 
         With ``comply`` on, a slide that stops before the surface ends (a bump blocks it, or
         the surface recedes a little) rides over the irregularity (:meth:`_ride`) and goes on.
@@ -1108,11 +1140,15 @@ class Controller:
                     pos, hop = ridden
                     travelled += hop
                     self.rides += 1
+                    if until is not None and until(pos):  # stopped where the ride regained it
+                        return replace(m, end=_v3(pos), event="none", measured=_v3(pos)), travelled
                     continue
             if m.event != "none" or m.distance < piece - 1e-9 or travelled >= length - 1e-9:
                 return m, travelled
             self._record(m, f, "slide")
             pos = np.asarray(m.end, dtype=float)
+            if until is not None and until(pos):
+                return m, travelled
 
     def _ride(self, m: Motion, f: _Follow, ahead: FloatArray) -> tuple[FloatArray, float] | None:
         """Ride over an irregularity that stopped the slide ``m`` of ``f``'s surface.
@@ -1327,7 +1363,7 @@ class Controller:
         finally:
             for index in sorted(edges.final(), reverse=True):
                 del self.contacts[index]
-            self._surfaces += [(float(pos[2]), g) for g in segs if not g.edge]
+            self._surfaces += [(float(pos[2]), g) for g in _surfaces(segs)]
 
     def _trace(
         self, pos: FloatArray, f: _Follow, last: bool, edges: _EdgeTouches, segs: list[_Segment]
@@ -1337,24 +1373,13 @@ class Controller:
         since = 0.0  # distance slid since the fresh touch
         while self._layer_motions < p.max_layer_motions:
             new_touch = fresh is not None and since == 0.0
-            surfaces = [g for g in segs if not g.edge]
-            if new_touch and surfaces and self._on_first(surfaces, pos, f):
-                # the first surface again: slide on to where the layer began (more tip centres
-                # on it, no touch), then the layer is closed
-                first = surfaces[0]
-                rest = float((first.start - pos) @ first.direction)
-                t = self._tangent(f)
-                if rest > self.spacing and t is not None:
-                    m, travelled = self._slide_sampled(pos, t, f, rest)
-                    segs.append(
-                        _Segment(frozenset(f.group), pos, first.direction, travelled, f.r0.copy())
-                    )
-                    pos = np.asarray(m.end, dtype=float)
-                    self._record(m, f, "slide")
-                else:
-                    segs.append(_Segment(frozenset(f.group), pos, first.direction, 0.0, f.r0))
-                return True, pos, f
-            if new_touch and surfaces and self._back_on(surfaces, pos, f):
+            surfaces = _surfaces(segs)
+            halfway = self._halfway()
+            if new_touch and surfaces and halfway and self._on_first(surfaces, pos, f):
+                return self._close_on_first(surfaces[0], segs, pos, f)
+            if p.comply and not new_touch and self._gone_round(surfaces, pos):
+                return self._close_on_first(surfaces[0], segs, pos, f)
+            if new_touch and surfaces and halfway and self._back_on(surfaces, pos, f):
                 return True, pos, f
             if new_touch and self._top_met(pos, f):
                 return False, pos, f
@@ -1365,7 +1390,8 @@ class Controller:
                 self._note("a horizontal surface met while contouring; contour stopped")
                 return False, pos, f
             start = pos
-            m, travelled = self._slide_sampled(pos, t, f, self.reach)
+            until = (lambda here: self._gone_round(_surfaces(segs), here)) if p.comply else None
+            m, travelled = self._slide_sampled(pos, t, f, self.reach, until=until)
             pos = np.asarray(m.end, dtype=float)
             since += travelled
             edge = False
@@ -1385,6 +1411,9 @@ class Controller:
             if edge and fresh is not None:
                 edges.edge(fresh, segs[-1] if travelled > 0 else None)
                 fresh = None
+            surfaces = _surfaces(segs)
+            if p.comply and m.event == "none" and self._gone_round(surfaces, pos):
+                return self._close_on_first(surfaces[0], segs, pos, f)
             if m.event == "touch":
                 if p.comply and fresh is None and self._ripple(m, f):
                     self.ripples += 1
@@ -1402,7 +1431,7 @@ class Controller:
                 if not edge:
                     self._record(m, f, "slide")
                 fresh = None
-                if last and self._before_first([g for g in segs if not g.edge], pos, f):
+                if last and self._before_first(_surfaces(segs), pos, f):
                     return True, pos, f
                 before = f
                 found = self._search(pos, np.asarray(m.direction, dtype=float), f)
@@ -1434,6 +1463,46 @@ class Controller:
             return False, pos, f
         self._note(f"contour budget of {p.max_layer_motions} motions exhausted")
         return False, pos, f
+
+    def _close_on_first(
+        self, first: _Segment, segs: list[_Segment], pos: FloatArray, f: _Follow
+    ) -> tuple[bool, FloatArray, _Follow]:
+        """The contour is back on the layer's ``first`` surface: slide on to where the layer
+        began (more tip centres on it, no touch); the layer is closed."""
+        rest = float((first.start - pos) @ first.direction)
+        t = self._tangent(f)
+        if rest > self.spacing and t is not None:
+            m, travelled = self._slide_sampled(pos, t, f, rest)
+            segs.append(_Segment(frozenset(f.group), pos, first.direction, travelled, f.r0.copy()))
+            pos = np.asarray(m.end, dtype=float)
+            self._record(m, f, "slide")
+        else:
+            segs.append(_Segment(frozenset(f.group), pos, first.direction, 0.0, f.r0))
+        return True, pos, f
+
+    def _halfway(self) -> bool:
+        """Whether a touch on a surface the layer already followed may close it: with
+        ``comply``, once the tip centres have turned :data:`HALF_DEG` round the object."""
+        if not self.params.comply or self._turning is None:
+            return True
+        return self._turning.total >= math.radians(HALF_DEG)
+
+    def _gone_round(self, surfaces: list[_Segment], pos: FloatArray) -> bool:
+        """Whether the contour went round the object without a touch closing it and is back on
+        the layer's first surface (``surfaces[0]``): its tip centres have turned
+        :data:`ROUND_DEG` or more, and ``pos`` lies on that surface's line (within
+        max(2 mm, 0.2 ρ) in x–y, as :meth:`_on_first` asks of a touch), before where the layer
+        began or at most ``l3`` + ρ past it."""
+        if self._turning is None or self._turning.total < math.radians(ROUND_DEG):
+            return False
+        if not surfaces:
+            return False
+        first = surfaces[0]
+        d = (np.asarray(first.start, dtype=float) - np.asarray(pos, dtype=float))[:2]
+        u = np.asarray(first.direction, dtype=float)[:2]
+        s = float(d @ u)
+        off = float(np.linalg.norm(d - s * u))
+        return off <= max(0.002, 0.2 * self.rho) and s >= -(self.params.l3 + self.rho)
 
     def _persist(
         self,
@@ -2258,6 +2327,28 @@ class _Look:
 
 
 @dataclass
+class _Turning:
+    """How far a layer's contour has turned: the sum of the changes of heading between its
+    successive tip centres (x–y) at least ``least`` apart, each taken within ±180°; 2π once
+    round an object counter-clockwise (a search cycle's detour, out and back, adds nothing)."""
+
+    last: FloatArray
+    least: float
+    heading: float | None = None
+    total: float = 0.0
+
+    def add(self, centre: Sequence[float]) -> None:
+        here = np.asarray(centre[:2], dtype=float)
+        d = here - self.last
+        if float(np.hypot(d[0], d[1])) < self.least:
+            return
+        heading = math.atan2(float(d[1]), float(d[0]))
+        if self.heading is not None:
+            self.total += (heading - self.heading + math.pi) % (2.0 * math.pi) - math.pi
+        self.heading, self.last = heading, here
+
+
+@dataclass
 class _Segment:
     """A surface slid along in a layer: its sensors, where the slide began, its direction."""
 
@@ -2296,6 +2387,11 @@ class _EdgeTouches:
         """The indices of the contacts to drop (the layer is over)."""
         self.surface()
         return self.dropped
+
+
+def _surfaces(segs: list[_Segment]) -> list[_Segment]:
+    """The segments of a layer that slid along surfaces (not edges)."""
+    return [g for g in segs if not g.edge]
 
 
 def _exit(point: FloatArray, direction: FloatArray, lo: FloatArray, hi: FloatArray) -> float:
