@@ -1141,7 +1141,10 @@ class Controller:
                     travelled += hop
                     self.rides += 1
                     if until is not None and until(pos):  # stopped where the ride regained it
-                        return replace(m, end=_v3(pos), event="none", measured=_v3(pos)), travelled
+                        here = _v3(pos)
+                        gone = float(np.linalg.norm(pos - np.asarray(m.start, dtype=float)))
+                        stop = replace(m, end=here, distance=gone, event="none", measured=here)
+                        return stop, travelled
                     continue
             if m.event != "none" or m.distance < piece - 1e-9 or travelled >= length - 1e-9:
                 return m, travelled
