@@ -1380,8 +1380,9 @@ class Controller:
             halfway = self._halfway()
             if new_touch and surfaces and halfway and self._on_first(surfaces, pos, f):
                 return self._close_on_first(surfaces[0], segs, pos, f)
-            if p.comply and not new_touch and self._gone_round(surfaces, pos):
-                return self._close_on_first(surfaces[0], segs, pos, f)
+            round_on = self._gone_round(segs, pos) if p.comply and not new_touch else None
+            if round_on is not None:
+                return self._close_on_first(round_on, segs, pos, f)
             if new_touch and surfaces and halfway and self._back_on(surfaces, pos, f):
                 return True, pos, f
             if new_touch and self._top_met(pos, f):
@@ -1393,7 +1394,7 @@ class Controller:
                 self._note("a horizontal surface met while contouring; contour stopped")
                 return False, pos, f
             start = pos
-            until = (lambda here: self._gone_round(_surfaces(segs), here)) if p.comply else None
+            until = (lambda here: self._gone_round(segs, here) is not None) if p.comply else None
             m, travelled = self._slide_sampled(pos, t, f, self.reach, until=until)
             pos = np.asarray(m.end, dtype=float)
             since += travelled
@@ -1414,9 +1415,9 @@ class Controller:
             if edge and fresh is not None:
                 edges.edge(fresh, segs[-1] if travelled > 0 else None)
                 fresh = None
-            surfaces = _surfaces(segs)
-            if p.comply and m.event == "none" and self._gone_round(surfaces, pos):
-                return self._close_on_first(surfaces[0], segs, pos, f)
+            round_on = self._gone_round(segs, pos) if p.comply and m.event == "none" else None
+            if round_on is not None:
+                return self._close_on_first(round_on, segs, pos, f)
             if m.event == "touch":
                 if p.comply and fresh is None and self._ripple(m, f):
                     self.ripples += 1
@@ -1472,7 +1473,7 @@ class Controller:
     ) -> tuple[bool, FloatArray, _Follow]:
         """The contour is back on the layer's ``first`` surface: slide on to where the layer
         began (more tip centres on it, no touch); the layer is closed."""
-        rest = float((first.start - pos) @ first.direction)
+        rest = -first.place(pos)[0]
         t = self._tangent(f)
         if rest > self.spacing and t is not None:
             m, travelled = self._slide_sampled(pos, t, f, rest)
@@ -1490,22 +1491,21 @@ class Controller:
             return True
         return self._turning.total >= math.radians(HALF_DEG)
 
-    def _gone_round(self, surfaces: list[_Segment], pos: FloatArray) -> bool:
-        """Whether the contour went round the object without a touch closing it and is back on
-        the layer's first surface (``surfaces[0]``): its tip centres have turned
-        :data:`ROUND_DEG` or more, and ``pos`` lies on that surface's line (within
+    def _gone_round(self, segs: list[_Segment], pos: FloatArray) -> _Segment | None:
+        """The layer's first surface when the contour went round the object without a touch
+        closing it and is back on that surface (None otherwise): its tip centres have turned
+        :data:`ROUND_DEG` or more, and ``pos`` lies on the surface's line (within
         max(2 mm, 0.2 ρ) in x–y, as :meth:`_on_first` asks of a touch), before where the layer
         began or at most ``l3`` + ρ past it."""
         if self._turning is None or self._turning.total < math.radians(ROUND_DEG):
-            return False
+            return None
+        surfaces = _surfaces(segs)
         if not surfaces:
-            return False
-        first = surfaces[0]
-        d = (np.asarray(first.start, dtype=float) - np.asarray(pos, dtype=float))[:2]
-        u = np.asarray(first.direction, dtype=float)[:2]
-        s = float(d @ u)
-        off = float(np.linalg.norm(d - s * u))
-        return off <= max(0.002, 0.2 * self.rho) and s >= -(self.params.l3 + self.rho)
+            return None
+        along, off = surfaces[0].place(pos, flat=True)
+        if off <= max(0.002, 0.2 * self.rho) and along <= self.params.l3 + self.rho:
+            return surfaces[0]
+        return None
 
     def _persist(
         self,
@@ -1636,20 +1636,15 @@ class Controller:
         first = segs[0]
         if not (set(f.group) & first.group) or all(s.group == first.group for s in segs):
             return False
-        d = first.start - pos
-        s = float(d @ first.direction)
-        off = float(np.linalg.norm(d - s * first.direction))
-        return off <= max(0.002, 0.2 * self.rho) and s >= -(self.params.l3 + self.rho)
+        along, off = first.place(pos)
+        return off <= max(0.002, 0.2 * self.rho) and along <= self.params.l3 + self.rho
 
     def _before_first(self, segs: list[_Segment], pos: FloatArray, f: _Follow) -> bool:
         """Whether the surface just left ends where the layer's first surface begins."""
         if len(segs) < 2 or set(f.group) & segs[0].group:
             return False
-        first = segs[0]
-        d = first.start - pos
-        s = float(d @ first.direction)
-        off = float(np.linalg.norm(d - s * first.direction))
-        return off <= 2.0 * self.rho and s >= -self.rho
+        along, off = segs[0].place(pos)
+        return off <= 2.0 * self.rho and along <= self.rho
 
     def _back_on(self, segs: list[_Segment], pos: FloatArray, f: _Follow) -> bool:
         """Whether ``pos`` (a new contact of ``f``) lies on a surface already followed in this layer."""
@@ -1657,10 +1652,8 @@ class Controller:
         for seg in segs[:-1]:
             if not seg.group & set(f.group):
                 continue
-            d = pos - seg.start
-            s = float(d @ seg.direction)
-            off = float(np.linalg.norm(d - s * seg.direction))
-            if off <= max(0.002, 0.2 * self.rho) and -reach_back <= s <= seg.length + 1e-6:
+            along, off = seg.place(pos)
+            if off <= max(0.002, 0.2 * self.rho) and -reach_back <= along <= seg.length + 1e-6:
                 return True
         return False
 
@@ -2361,6 +2354,16 @@ class _Segment:
     length: float
     r0: FloatArray
     edge: bool = False
+
+    def place(self, pos: FloatArray, *, flat: bool = False) -> tuple[float, float]:
+        """Where ``pos`` lies from the segment's line: how far along it from :attr:`start`, and
+        how far off it (``flat``: in x–y only)."""
+        d = np.asarray(pos, dtype=float) - np.asarray(self.start, dtype=float)
+        u = np.asarray(self.direction, dtype=float)
+        if flat:
+            d, u = d[:2], u[:2]
+        along = float(d @ u)
+        return along, float(np.linalg.norm(d - along * u))
 
 
 @dataclass
