@@ -262,6 +262,41 @@ def test_nearest_points_skip_only_idle_planes(mesh: trimesh.Trimesh) -> None:
         assert np.array_equal(got[inside], x[inside])
 
 
+def _wedge(deg: float) -> tuple[np.ndarray, np.ndarray]:
+    """A box 8 × 6 × 5 cm whose +x side is cut by a plane ``deg`` off it: two planes at a
+    small angle, along whose edge Dykstra's projections creep."""
+    t = np.radians(deg)
+    n = np.vstack([np.eye(3), -np.eye(3), [np.cos(t), 0.0, np.sin(t)]])
+    d = np.array([0.04, 0.03, 0.05, 0.04, 0.03, 0.0, 0.04 * np.cos(t) + 0.04 * np.sin(t)])
+    return n, d
+
+
+@pytest.mark.parametrize("deg", [2.0, 10.0, 45.0])
+def test_nearest_points_stop_only_at_the_fixed_point(deg: float) -> None:
+    """A sweep that changes nothing ends the projections: the points are the 60 sweeps'
+    bits, whether they settled in a few sweeps or crept on to the last (points beyond the
+    edge of two planes ``deg`` apart); and no more sweeps are needed where they settled."""
+    n, d = _wedge(deg)
+    rng = np.random.default_rng(11)
+    x = np.array([0.04, 0.0, 0.04]) + rng.normal(scale=0.03, size=(60, 3))
+    got = nearest_points(x, n, d)
+    assert np.array_equal(got, _plain_nearest(x, n, d))
+    longer = nearest_points(x, n, d, iterations=400)
+    settled = np.all(longer == got, axis=1)
+    assert settled.sum() >= 30  # most points had reached the fixed point within 60 sweeps
+    # every point lies in the set, and no nearer point of it is found on a finer grid
+    assert (longer @ n.T - d).max() <= 1e-9
+    grid = np.stack(
+        np.meshgrid(
+            *(np.linspace(-0.04, 0.04, 33), np.linspace(-0.03, 0.03, 25), np.linspace(0, 0.05, 21))
+        ),
+        axis=-1,
+    ).reshape(-1, 3)
+    grid = grid[(grid @ n.T - d).max(axis=1) <= 0]
+    nearest_grid = np.sqrt(((x[:, None, :] - grid[None]) ** 2).sum(axis=2)).min(axis=1)
+    assert np.all(np.linalg.norm(x - longer, axis=1) <= nearest_grid + 1e-9)
+
+
 def test_nearest_points_of_a_box_are_clipped_coordinates() -> None:
     lo, hi = np.array([-0.04, -0.03, 0.0]), np.array([0.04, 0.03, 0.05])
     n = np.vstack([np.eye(3), -np.eye(3)])
