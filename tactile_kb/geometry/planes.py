@@ -1783,8 +1783,8 @@ def nearest_points(
     alternating projections over the half-spaces they are outside of or near, for at most
     ``iterations`` sweeps. A sweep that leaves every point and every correction as it was,
     bit for bit, has reached the projections' fixed point: every later sweep would repeat it,
-    so none is made, and the result is the one all the sweeps give. Most calls settle within
-    a dozen sweeps; a few (points near two planes at a small angle) creep on to the last.
+    so none is made, and the result is the one all the sweeps give. Many calls settle within
+    a dozen sweeps; some (points near two planes at a small angle) creep on to the last.
     """
     x = np.asarray(x, dtype=float).reshape(-1, 3)
     n = np.asarray(normals, dtype=float).reshape(-1, 3)
