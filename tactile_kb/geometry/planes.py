@@ -1814,9 +1814,9 @@ def nearest_points(
             i += int(busy[0])
             z = y + corr[i]
             step = z - np.maximum(z @ n[i] - d[i], 0.0)[:, None] * n[i][None, :]
-            fixed = fixed and np.array_equal(step, y) and np.array_equal(z - step, corr[i])
-            y = step
-            corr[i] = z - y
+            undo = z - step
+            fixed = fixed and np.array_equal(step, y) and np.array_equal(undo, corr[i])
+            y, corr[i] = step, undo
             live[i] = bool(corr[i].any())
             i += 1
         if fixed:  # the sweep left every point and every correction as it was
