@@ -47,6 +47,7 @@ from dataclasses import dataclass, field
 from typing import Any, Literal, TypeVar, cast
 
 import numpy as np
+from scipy.spatial import ConvexHull, QhullError
 
 from tactile_kb.errors import GeometryError, OpenModelError, UsageError
 from tactile_kb.geometry.planes import (
@@ -257,8 +258,10 @@ def build_model(
         After those, drop the faces the rounded envelope of the others explains
         (:func:`tactile_kb.geometry.rounded.unexplained`, when ``geometry.rounded_fit_sigmas``
         is positive and ``edge_rounding`` is not None); their contacts join
-        ``options["edge_contacts"]``. The completion's models in the exploration loop leave it
-        out (False): it costs a fit per face, and only the final model is classified.
+        ``options["edge_contacts"]``, and so do those of a face that does not support the object
+        but lies on the outside of the touches (:func:`_on_the_hull`): no concave face. The
+        completion's models in the exploration loop leave all this out (False): it costs a fit
+        per face, and only the final model is classified.
 
     Returns
     -------
@@ -329,6 +332,7 @@ def build_model(
         and 5 <= len(faces) <= ROUNDED_MAX_FACES
     ):
         drop = _rounded_drop(faces, supporting, arrays[0], record.tip_radius, noise, edge_rounding)
+        drop = sorted({*drop, *_on_the_hull(faces, supporting, arrays[0], record.tip_radius, tol)})
         if drop:
             faces, edge_contacts = _without(faces, drop, edge_contacts)
             points, normals, offsets, supporting = _support(
@@ -559,6 +563,78 @@ def _rounded_drop(
         min_width=current().geometry.rounded_min_width * rho,
     )
     return sorted(js[p] for p in removed)
+
+
+HULL_FACING_DEG = 75.0
+"""The facets of the tip centres' convex hull that a face's touches may lie on
+(:func:`_on_the_hull`) face within this angle of its normal: not the hull's bottom or top,
+which a layer of touches across a concave face lies on too (an L-block felt by the 4-sensor
+finger at one height)."""
+
+
+STEP_DEG = 10.0
+"""A face that supports nothing is a step's (concave, :func:`_on_the_hull`) when a face that
+supports the object lies within this angle of parallel to it …"""
+
+STEP_RHO = 2.0
+"""… and further out than this many tip radii: a T-block standing on its stem, felt by nine
+touches, has its stem's sides touched where they lie on the hull of the touches, but the
+crossbar's ends 4 cm further out the same way. A second plane fitted to part of a scan's
+face lies a few millimetres off its face."""
+
+
+def _on_the_hull(
+    faces: tuple[Face, ...],
+    supporting: list[bool],
+    centres: FloatArray,
+    rho: float,
+    tol: float,
+) -> list[int]:
+    """The faces that do not support the object although every one of their tip centres lies
+    within ``tol`` of the convex hull of all the tip centres (scipy's Qhull), on its facets
+    facing their way (:data:`HULL_FACING_DEG`), and are no step's (:data:`STEP_DEG`,
+    :data:`STEP_RHO`).
+
+    Such a face touched the object's outside where the other faces are: a plane fitted to a
+    rounded edge's or a bump's few touches, or to part of a face whose normal (its sensors',
+    or a fit to a short row) lies a few degrees off. It made a convex scan concave: 44 of the
+    138 wrong answers of levels 2 and 3 on four draws of ``bench_real.py`` came from such
+    faces. A concave face's touches lie deep inside the hull, by the depth of the notch or
+    hollow they are in, unless they were all made at its rim: then the face beside the notch
+    that reaches further out the same way tells."""
+    ks = [
+        k
+        for k, f in enumerate(faces)
+        if not supporting[k] and f.source == "contacts" and f.contacts
+    ]
+    if not ks or len(centres) < 4:
+        return []
+    try:
+        hull = ConvexHull(centres)
+    except QhullError:  # the touches span no solid: no hull to lie on
+        return []
+    facets = hull.equations
+    facing = math.cos(math.radians(HULL_FACING_DEG))
+    parallel = math.cos(math.radians(STEP_DEG))
+    out = []
+    for k in ks:
+        n = faces[k].normal_array
+        if any(
+            supporting[j]
+            and g.source == "contacts"
+            and float(g.normal_array @ n) >= parallel
+            and g.offset - faces[k].offset > STEP_RHO * rho
+            for j, g in enumerate(faces)
+        ):
+            continue  # a step: a face beside it reaches further out the same way
+        near = facets[facets[:, :3] @ n >= facing]
+        if not len(near):
+            continue
+        c = centres[list(faces[k].contacts)]
+        depth = (-(c @ near[:, :3].T + near[:, 3])).min(axis=1)
+        if float(depth.max()) <= tol:
+            out.append(k)
+    return out
 
 
 def _support(
