@@ -473,7 +473,7 @@ class FeatureSettings(_Group):
         gt=0,
         lt=180,
         description="Degrees: a face whose interior contacts fired sensors further apart, and "
-        "whose tip centres turn by more than this (by two standard errors), is curved; where "
+        "whose tip centres turn by more than this (by bend_sigmas standard errors), is curved; where "
         "the centres cannot measure the turn, or estimate it at least this without "
         "establishing it, the spread counts as one gentle fold towards min_smooth_edges.",
     )
@@ -483,6 +483,14 @@ class FeatureSettings(_Group):
         description="Tip radii: the least scatter of tip centres (surface detail, the world's "
         "numerics) assumed when a face's turn is measured from them, if the record declares "
         "less noise.",
+    )
+    bend_sigmas: float = Field(
+        3.0,
+        gt=0,
+        description="Standard errors by which a face's measured turn must exceed spread_deg to "
+        "make the surface curved. Each face whose sensors spread is tested: at two, a flat "
+        "face's turn passes one time in 44 (one-sided), a model with six such faces one time "
+        "in eight; at three, one face in 740.",
     )
     min_sagitta_contacts: int = Field(
         8,

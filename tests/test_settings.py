@@ -88,6 +88,7 @@ DOCUMENTED: dict[str, dict[str, float | str]] = {
         "sagitta_rho": 0.5,
         "spread_deg": 10.0,
         "bend_sigma_rho": 0.02,
+        "bend_sigmas": 3.0,
         "sagitta_fraction": 0.03,
         "min_sagitta_contacts": 8,
         "smooth_deg": 35.0,

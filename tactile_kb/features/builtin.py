@@ -585,9 +585,10 @@ def surface_curved(
     (:mod:`tactile_kb.settings`) × the face's width) from the face's edges count
     (:func:`interior_spread_deg`), and a flat face turned between two sensors fires either.
     Where such contacts fired sensors more than ``spread_deg`` apart, the face's tip centres
-    measure its turn (:func:`spread_bend`): beyond ``spread_deg`` by two standard errors,
-    curved; below it by two, the sensors' quantisation. Where the centres cannot tell, the
-    face counts as one gentle fold towards ``min_smooth_edges``."""
+    measure its turn (:func:`spread_bend`): beyond ``spread_deg`` by ``features.bend_sigmas``
+    standard errors, curved; below it, the sensors' quantisation or the face's relief. Where
+    the centres cannot tell, the face counts as one gentle fold towards
+    ``min_smooth_edges``."""
     smooth_deg = _default(smooth_deg, "smooth_deg")
     spread_deg = _default(spread_deg, "spread_deg")
     min_smooth_edges = _default(min_smooth_edges, "min_smooth_edges")
@@ -1159,9 +1160,12 @@ def _spread_evidence(model: ObjectModel, spread_deg: float) -> tuple[bool, int]:
     tell: ``(bent, folds)``.
 
     The face's tip centres measure its turn (:func:`spread_bend`). Beyond ``spread_deg`` by
-    two standard errors, both the one the centres' scatter implies and the jackknife's (a
-    turn that rests on one or two centres, a bump's or an edge's touch at the end of a row,
-    is not established): ``bent``. Otherwise the spread is weak evidence where the centres
+    ``features.bend_sigmas`` (3) standard errors, both the one the centres' scatter implies
+    and the jackknife's (a turn that rests on one or two centres, a bump's or an edge's touch
+    at the end of a row, is not established): ``bent``. Every face whose sensors spread is
+    tested, so the false alarms of all of them add up: at two errors a model of six such
+    flat faces would be curved one time in eight (on ``bench_real.py``'s scans, a prism's
+    side touched 8 or 15 times measured a turn of 43° or 82° and made it so). Otherwise the spread is weak evidence where the centres
     cannot tell at all (on two lines, too few) or where their estimate itself reaches
     ``spread_deg`` (:func:`_leans`): the face counts as one gentle fold, as a smooth edge does
     (``folds``); an estimate below it is the sensors' quantisation (a flat face turned between
@@ -1187,7 +1191,7 @@ def _spread_evidence(model: ObjectModel, spread_deg: float) -> tuple[bool, int]:
             if bend is None:
                 continue
             turn, sigma, jack = bend
-            if outward(turn) - 2.0 * jack > spread_deg:
+            if outward(turn) - current().features.bend_sigmas * jack > spread_deg:
                 return True, folds  # measured: it turns by more than spread_deg
             if _leans(turn, sigma, spread_deg):
                 folds += 1  # the centres cannot tell: the sensors' weak evidence
