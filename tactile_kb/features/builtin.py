@@ -1235,12 +1235,23 @@ def face_sagitta(model: ObjectModel, face: Face) -> tuple[float, float] | None:
     e·v + f`` in the face's own coordinates; the sagitta is the range, over the contacts, of
     the quadric's departure from its best plane, and the extent is the contacts' largest
     spread in the face. A cylinder's face bends by ``w²/8R`` over a width ``w``.
+
+    Only the contacts on the face's flat part are fitted, when at least
+    ``features.min_sagitta_contacts`` of them are: those whose feet lie further from the
+    edges of the face's polygon than the largest edge rounding (``geometry.edge_rounding`` ×
+    the face's width, as :func:`interior_spread_deg` leaves out). A tip on a rounded edge
+    sits lower the further it rolls round it (by ``(r + ρ)(1 − cos θ)``, 2 mm at 30° for a
+    1 cm rounding), and those touches, at one side of a face, bent its quadric by more than
+    the tolerance: a scanned frustum's side was read curved.
     """
     if len(face.contacts) < current().features.min_sagitta_contacts or face.source != "contacts":
         return None
 
     def compute() -> tuple[float, float]:
         c = np.asarray([model.record.contacts[i].centre for i in face.contacts], dtype=float)
+        flat = _on_flat_part(model, face, c)
+        if int(flat.sum()) >= current().features.min_sagitta_contacts:
+            c = c[flat]
         n = face.normal_array
         u = np.cross(n, [0.0, 0.0, 1.0] if abs(n[2]) < 0.9 else [1.0, 0.0, 0.0])
         u /= np.linalg.norm(u)
@@ -1262,7 +1273,28 @@ def face_sagitta(model: ObjectModel, face: Face) -> tuple[float, float] | None:
         dev = quad - lin @ np.linalg.lstsq(lin, quad, rcond=None)[0]
         return float(np.ptp(dev)), extent
 
-    return _derived(model, (__name__, current().features, "sagitta", face.contacts), compute)
+    return _derived(
+        model,
+        (__name__, current().features, current().geometry, "sagitta", face.contacts),
+        compute,
+    )
+
+
+def _on_flat_part(model: ObjectModel, face: Face, centres: FloatArray) -> NDArray[np.bool_]:
+    """Which of ``face``'s tip ``centres`` have their feet on its flat part: further from the
+    edges of its polygon than ``geometry.edge_rounding`` × its width. All of them when the
+    face has no polygon (no polyhedron, or not one of its faces)."""
+    p = model.polyhedron
+    mine = [fi for fi, k in enumerate(model.face_of) if model.faces[k] is face]
+    if p is None or not mine:
+        return np.ones(len(centres), dtype=bool)
+    loop = p.vertices[list(p.faces[mine[0]])]
+    n = p.normals[mine[0]]
+    foot = centres - np.outer(centres @ n - p.offsets[mine[0]], n)
+    from tactile_kb.geometry.polyhedron import face_width
+
+    rounding = current().geometry.edge_rounding * face_width(p, mine[0])
+    return np.asarray(_polygon_edge_distance(foot, loop, n) > rounding, dtype=bool)
 
 
 def _edge_cosines(model: ObjectModel, p: Polyhedron) -> FloatArray:
