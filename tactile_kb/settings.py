@@ -473,9 +473,10 @@ class FeatureSettings(_Group):
         gt=0,
         lt=180,
         description="Degrees: a face whose interior contacts fired sensors further apart, and "
-        "whose tip centres turn by more than this (by bend_sigmas standard errors), is curved; where "
-        "the centres cannot measure the turn, or estimate it at least this without "
-        "establishing it, the spread counts as one gentle fold towards min_smooth_edges.",
+        "whose tip centres turn by more than this (by bend_sigmas standard errors), is "
+        "curved; where the centres cannot measure the turn, or estimate it at least this "
+        "without establishing it, the spread counts as one gentle fold towards "
+        "min_smooth_edges.",
     )
     bend_sigma_rho: float = Field(
         0.02,

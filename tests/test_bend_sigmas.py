@@ -4,9 +4,9 @@ beyond three standard errors, and its sagitta is measured on its flat part.
 Every face whose interior sensors spread is tested for a turn, so at two standard errors the
 false alarms of a model's flat faces add up (one model in eight with six such faces). These
 are saved scans of flat-faced prisms (``bench_real.py``, draw 0, 0.5 mm declared noise)
-whose model had one side measured as turning by 43° or 82° on 8 or 15 touches, just two
-standard errors beyond ``features.spread_deg``: the prisms' faces are flat, and they are no
-longer curved.
+whose model had one side measured as turning by 43° or 82° on 8 or 15 touches, more than
+two standard errors beyond ``features.spread_deg`` but less than three: the prisms' faces
+are flat, and they are no longer curved.
 """
 
 from __future__ import annotations
@@ -42,8 +42,10 @@ def _record(name: str) -> ExplorationRecord:
     ("name", "label"),
     [
         # prism(6, 0.0205, 0.102), a level-2 scan: vertex noise, bumps, edges rounded by 6 %
+        # of the shortest (1.2 mm)
         ("prism6-level2-draw0.json.gz", "prism"),
-        # prism(4, 0.0818, 0.0738), a level-3 scan: a box 8.2 cm square and 7.4 cm high
+        # prism(4, 0.0818, 0.0738), a level-3 scan: a box 11.6 cm square and 7.4 cm high,
+        # its edges rounded by 7.4 mm
         ("prism4-level3-draw0.json.gz", "rectangular_parallelepiped"),
     ],
 )
@@ -84,7 +86,7 @@ def test_a_frustums_side_is_not_bent_by_the_touches_of_its_rounded_edges(
     monkeypatch: pytest.MonkeyPatch,
 ) -> None:
     # frustum(4, 0.047, 0.0258, 0.0262), a level-3 scan (edges rounded by 10 % of the
-    # shortest, 2.6 mm, bumps and letters of 1 mm), 0.5 mm declared noise (draw 3): touches
+    # shortest, 3.4 mm, bumps and letters of 1 mm), 0.5 mm declared noise (draw 3): touches
     # that rolled round a rounded edge sit lower at one side of a side face, and its quadric
     # over all of them bent by more than the sagitta tolerance
     record = _record("frustum4-level3-draw3.json.gz")

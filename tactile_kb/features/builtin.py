@@ -1165,8 +1165,8 @@ def _spread_evidence(model: ObjectModel, spread_deg: float) -> tuple[bool, int]:
     at the end of a row, is not established): ``bent``. Every face whose sensors spread is
     tested, so the false alarms of all of them add up: at two errors a model of six such
     flat faces would be curved one time in eight (on ``bench_real.py``'s scans, a prism's
-    side touched 8 or 15 times measured a turn of 43° or 82° and made it so). Otherwise the spread is weak evidence where the centres
-    cannot tell at all (on two lines, too few) or where their estimate itself reaches
+    side touched 8 or 15 times measured a turn of 43° or 82° and made it so). Otherwise the
+    spread is weak evidence where the centres cannot tell at all (on two lines, too few) or where their estimate itself reaches
     ``spread_deg`` (:func:`_leans`): the face counts as one gentle fold, as a smooth edge does
     (``folds``); an estimate below it is the sensors' quantisation (a flat face turned between
     two sensors fires either) or the face's relief. So does a face whose contacts fired
@@ -1284,6 +1284,8 @@ def _on_flat_part(model: ObjectModel, face: Face, centres: FloatArray) -> NDArra
     """Which of ``face``'s tip ``centres`` have their feet on its flat part: further from the
     edges of its polygon than ``geometry.edge_rounding`` × its width. All of them when the
     face has no polygon (no polyhedron, or not one of its faces)."""
+    from tactile_kb.geometry.polyhedron import face_width
+
     p = model.polyhedron
     mine = [fi for fi, k in enumerate(model.face_of) if model.faces[k] is face]
     if p is None or not mine:
@@ -1291,8 +1293,6 @@ def _on_flat_part(model: ObjectModel, face: Face, centres: FloatArray) -> NDArra
     loop = p.vertices[list(p.faces[mine[0]])]
     n = p.normals[mine[0]]
     foot = centres - np.outer(centres @ n - p.offsets[mine[0]], n)
-    from tactile_kb.geometry.polyhedron import face_width
-
     rounding = current().geometry.edge_rounding * face_width(p, mine[0])
     return np.asarray(_polygon_edge_distance(foot, loop, n) > rounding, dtype=bool)
 
