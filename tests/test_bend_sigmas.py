@@ -111,19 +111,12 @@ def test_a_frustums_side_is_not_bent_by_the_touches_of_its_rounded_edges(
     assert bent_faces(result.model) == []
     assert not surface_curved(result.model)
     assert result.decision.label == "frustum"
-    flat = [
-        _on_flat_part(result.model, f, _centres(record, f.contacts))
-        for f in result.model.contact_faces
-    ]
+    flat = [_on_flat_part(result.model, f) for f in result.model.contact_faces]
     assert any(0 < int(m.sum()) < len(m) for m in flat)  # touches by edges left out
     # every touch fitted, those by the rounded edges too: a side bends beyond the tolerance
     monkeypatch.setattr(
-        builtin, "_on_flat_part", lambda model, face, c: np.ones(len(c), dtype=bool)
+        builtin, "_on_flat_part", lambda model, face: np.ones(len(face.contacts), dtype=bool)
     )
     whole = classify_record(record, rules="polyhedra")
     assert len(bent_faces(whole.model)) == 1
     assert whole.decision.label == "curved"
-
-
-def _centres(record: ExplorationRecord, which: tuple[int, ...]) -> np.ndarray:
-    return np.asarray([record.contacts[i].centre for i in which], dtype=float)

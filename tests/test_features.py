@@ -614,7 +614,7 @@ def test_curvature_is_measured_over_the_face() -> None:
     sag, extent = face_sagitta(bent, face)
     # over the contacts on the face's flat part: those by its edges (a rounding's) are left out
     c = np.asarray([contacts[i].centre for i in face.contacts], dtype=float)
-    flat = _on_flat_part(bent, face, c)
+    flat = _on_flat_part(bent, face)
     assert 8 <= int(flat.sum()) < len(c)
     xs = c[flat, 0]
     assert sag == pytest.approx((max(xs) - min(xs)) ** 2 / (8 * big_r), rel=0.35)

@@ -887,6 +887,7 @@ class _Spread:
     any_angle: float = 0.0  # largest angle between any two of the face's contacts
     any_pair: tuple[int, int] = (-1, -1)
     on_face: tuple[int, ...] = ()  # contacts whose feet lie inside the face's polygon
+    flat: tuple[int, ...] = ()  # those further inside than the edge rounding allowance
 
 
 def _face_spreads(model: ObjectModel) -> list[_Spread]:
@@ -928,15 +929,16 @@ def _face_spreads(model: ObjectModel) -> list[_Spread]:
             own = edge_dist > rho * np.sin(np.radians(ang.max(axis=1))) + rounding
             interior = tuple(int(face.contacts[k]) for k in np.flatnonzero(own))
             on_face = tuple(int(face.contacts[k]) for k in np.flatnonzero(edge_dist > 0.0))
+            flat = tuple(int(face.contacts[k]) for k in np.flatnonzero(edge_dist > rounding))
             e, f = np.unravel_index(int(np.argmax(ang)), ang.shape)
             anywhere = (float(ang[e, f]), (int(face.contacts[e]), int(face.contacts[f])))
             if not inside.any():
-                out.append(_Spread(0.0, (-1, -1), interior, *anywhere, on_face))
+                out.append(_Spread(0.0, (-1, -1), interior, *anywhere, on_face, flat))
                 continue
             masked = np.where(inside, ang, -1.0)
             a, b = np.unravel_index(int(np.argmax(masked)), masked.shape)
             pair = (int(face.contacts[a]), int(face.contacts[b]))
-            out.append(_Spread(float(masked[a, b]), pair, interior, *anywhere, on_face))
+            out.append(_Spread(float(masked[a, b]), pair, interior, *anywhere, on_face, flat))
         return out
 
     return _derived(
@@ -1166,10 +1168,10 @@ def _spread_evidence(model: ObjectModel, spread_deg: float) -> tuple[bool, int]:
     tested, so the false alarms of all of them add up: at two errors a model of six such
     flat faces would be curved one time in eight (on ``bench_real.py``'s scans, a prism's
     side touched 8 or 15 times measured a turn of 43° or 82° and made it so). Otherwise the
-    spread is weak evidence where the centres cannot tell at all (on two lines, too few) or where their estimate itself reaches
-    ``spread_deg`` (:func:`_leans`): the face counts as one gentle fold, as a smooth edge does
-    (``folds``); an estimate below it is the sensors' quantisation (a flat face turned between
-    two sensors fires either) or the face's relief. So does a face whose contacts fired
+    spread is weak evidence where the centres cannot tell at all (on two lines, too few) or
+    where their estimate itself reaches ``spread_deg`` (:func:`_leans`): the face counts as
+    one gentle fold, as a smooth edge does (``folds``); an estimate below it is the sensors'
+    quantisation (a flat face turned between two sensors fires either) or the face's relief. So does a face whose contacts fired
     sensors that far apart only near its edges: a small cylinder's faces are too narrow to
     have an inside, a box's are measured flat."""
 
@@ -1249,7 +1251,7 @@ def face_sagitta(model: ObjectModel, face: Face) -> tuple[float, float] | None:
 
     def compute() -> tuple[float, float]:
         c = np.asarray([model.record.contacts[i].centre for i in face.contacts], dtype=float)
-        flat = _on_flat_part(model, face, c)
+        flat = _on_flat_part(model, face)
         if int(flat.sum()) >= current().features.min_sagitta_contacts:
             c = c[flat]
         n = face.normal_array
@@ -1280,21 +1282,16 @@ def face_sagitta(model: ObjectModel, face: Face) -> tuple[float, float] | None:
     )
 
 
-def _on_flat_part(model: ObjectModel, face: Face, centres: FloatArray) -> NDArray[np.bool_]:
-    """Which of ``face``'s tip ``centres`` have their feet on its flat part: further from the
-    edges of its polygon than ``geometry.edge_rounding`` × its width. All of them when the
-    face has no polygon (no polyhedron, or not one of its faces)."""
-    from tactile_kb.geometry.polyhedron import face_width
-
-    p = model.polyhedron
+def _on_flat_part(model: ObjectModel, face: Face) -> NDArray[np.bool_]:
+    """Per contact of ``face``, whether its foot lies on the face's flat part: further from the
+    edges of its polygon than ``geometry.edge_rounding`` × its width (:func:`_face_spreads`'
+    ``flat``; none for a face of fewer than two contacts, which it does not measure). All of
+    them when the face has no polygon (no polyhedron, or not one of its faces)."""
     mine = [fi for fi, k in enumerate(model.face_of) if model.faces[k] is face]
-    if p is None or not mine:
-        return np.ones(len(centres), dtype=bool)
-    loop = p.vertices[list(p.faces[mine[0]])]
-    n = p.normals[mine[0]]
-    foot = centres - np.outer(centres @ n - p.offsets[mine[0]], n)
-    rounding = current().geometry.edge_rounding * face_width(p, mine[0])
-    return np.asarray(_polygon_edge_distance(foot, loop, n) > rounding, dtype=bool)
+    spreads = _face_spreads(model)
+    if not mine or mine[0] >= len(spreads):
+        return np.ones(len(face.contacts), dtype=bool)
+    return np.isin(np.asarray(face.contacts, dtype=np.intp), spreads[mine[0]].flat)
 
 
 def _edge_cosines(model: ObjectModel, p: Polyhedron) -> FloatArray:
