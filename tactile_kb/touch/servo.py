@@ -1585,7 +1585,8 @@ class Controller:
         """Whether the contact ``f`` at ``pos`` that a search cycle found after the surface
         ``before`` (slid along as ``seg``) fell away is the same face beyond a dent or a rough
         patch: its tip centre lies within 2 ``bump`` of the line the tip centres followed on
-        that face, and its sensors point within 60° of ``before``'s (a rough scan's local
+        that face (the last slide's chord, or the line of the surface's whole run:
+        :meth:`_run_line`), and its sensors point within 60° of ``before``'s (a rough scan's local
         normal swings by 30–50° from one contact to the next, so the position decides). Past a
         real edge turned by θ the search (``l1`` on, then towards the object) meets the next
         face about l1 · tan θ off that line: 2.5 mm at 17°, 4.6 mm for the 30° edges of a
@@ -1613,9 +1614,9 @@ class Controller:
         lie on: the least-squares line of the contacts since the touch that began it (the
         contact just made, by a search cycle, left out), when they span at least
         :data:`RUN_SPAN_RHO` ρ along it. A short slide's chord on a rough face turns with its
-        bumps (a 4 mm slide over a scan of 1 mm vertex noise, by 15°): at the end of a
-        search cycle 16 mm on, the chord's line is millimetres off a face whose centres
-        the whole run puts within a millimetre."""
+        bumps (tip centres a millimetre off the face at either end of a 4 mm slide turn it by
+        14°): at the end of a search cycle 8–16 mm on, the chord's line is millimetres off a
+        face whose centres the whole run's line passes within a millimetre or two of."""
         k = len(self.contacts) - 2
         while k > 0 and self.contacts[k].kind != "touch":
             k -= 1
