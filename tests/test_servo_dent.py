@@ -96,7 +96,7 @@ def test_a_contact_off_both_lines_is_a_new_surface(y: float) -> None:
 
 def test_a_short_run_leaves_the_chord_to_judge() -> None:
     c = _controller([0.0, 0.002, 0.004])
-    assert 0.004 < RUN_SPAN_RHO * c.rho  # the run spans less than RUN_SPAN_RHO ρ
+    assert RUN_SPAN_RHO * c.rho > 0.004  # the run spans less than RUN_SPAN_RHO ρ
     seg = _chord(0.004)
     assert c._run_line() is None
     assert not _dent(c, seg, 0.0)
@@ -117,4 +117,5 @@ def test_the_run_begins_at_the_surfaces_touch() -> None:
     line = c._run_line()
     assert line is not None
     mean, along = line
-    assert abs(float(mean[1])) < 1e-12 and abs(abs(float(along[0])) - 1.0) < 1e-12
+    assert abs(float(mean[1])) < 1e-12
+    assert abs(abs(float(along[0])) - 1.0) < 1e-12
