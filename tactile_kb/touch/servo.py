@@ -109,10 +109,6 @@ RIPPLE_DEG = DEFAULTS.servo.ripple_deg
 """Degrees: a sensor closing during a slide while the followed one stays ON is a neighbour of
 it (the 33-sensor finger's neighbours lie 30° apart) when within this angle."""
 
-RUN_SPAN_RHO = 2.0
-"""Tip radii: the tip centres of a surface's run must span this much before their line judges
-where a search cycle met the object again (:meth:`Controller._run_line`)."""
-
 PERSIST_TRIES = DEFAULTS.servo.persist_tries
 """How often a blocked slide's re-acquisition (:meth:`Controller._persist`) backs off and steps
 on, each time twice as far (0.8, 1.6, 3.2 tip radii), before the contour ends."""
@@ -1585,8 +1581,7 @@ class Controller:
         """Whether the contact ``f`` at ``pos`` that a search cycle found after the surface
         ``before`` (slid along as ``seg``) fell away is the same face beyond a dent or a rough
         patch: its tip centre lies within 2 ``bump`` of the line the tip centres followed on
-        that face (the last slide's chord, or the line of the surface's whole run:
-        :meth:`_run_line`), and its sensors point within 60° of ``before``'s (a rough scan's local
+        that face, and its sensors point within 60° of ``before``'s (a rough scan's local
         normal swings by 30–50° from one contact to the next, so the position decides). Past a
         real edge turned by θ the search (``l1`` on, then towards the object) meets the next
         face about l1 · tan θ off that line: 2.5 mm at 17°, 4.6 mm for the 30° edges of a
@@ -1600,35 +1595,7 @@ class Controller:
             return False
         d = np.asarray(pos, dtype=float)[:2] - np.asarray(seg.start, dtype=float)[:2]
         off = abs(float(d[0] * u[1] - d[1] * u[0])) / nu
-        if off <= 2.0 * self.bump:
-            return True
-        line = self._run_line()
-        if line is None:
-            return False
-        mean, along = line
-        d = np.asarray(pos, dtype=float)[:2] - mean
-        return abs(float(d[0] * along[1] - d[1] * along[0])) <= 2.0 * self.bump
-
-    def _run_line(self) -> tuple[FloatArray, FloatArray] | None:
-        """The line (x–y: a point and a unit direction) the tip centres of the surface followed
-        lie on: the least-squares line of the contacts since the touch that began it (the
-        contact just made, by a search cycle, left out), when they span at least
-        :data:`RUN_SPAN_RHO` ρ along it. A short slide's chord on a rough face turns with its
-        bumps (tip centres a millimetre off the face at either end of a 4 mm slide turn it by
-        14°): at the end of a search cycle 8–16 mm on, the chord's line is millimetres off a
-        face whose centres the whole run's line passes within a millimetre or two of."""
-        k = len(self.contacts) - 2
-        while k > 0 and self.contacts[k].kind != "touch":
-            k -= 1
-        if k < 0 or len(self.contacts) - 1 - k < 3:
-            return None
-        c = np.asarray([x.centre[:2] for x in self.contacts[k:-1]], dtype=float)
-        mean = c.mean(axis=0)
-        _, _, vt = np.linalg.svd(c - mean, full_matrices=False)
-        along = np.asarray(vt[0], dtype=float)
-        if float(np.ptp((c - mean) @ along)) < RUN_SPAN_RHO * self.rho:
-            return None
-        return mean, along
+        return off <= 2.0 * self.bump
 
     def _ripple(self, m: Motion, f: _Follow) -> bool:
         """Whether a sensor closing during a slide is a ripple of the surface followed (a scan's
