@@ -24,6 +24,7 @@ from tactile_kb.features.builtin import (
     _face_spreads,
     _on_flat_part,
     face_sagitta,
+    sagitta_tolerance,
     surface_curved,
 )
 from tactile_kb.geometry.model import ObjectModel
@@ -92,18 +93,13 @@ def test_a_frustums_side_is_not_bent_by_the_touches_of_its_rounded_edges(
     record = _record("frustum4-level3-draw3.json.gz")
 
     def bent_faces(model: ObjectModel) -> list[Face]:
-        feats = settings.current().features
-        rho = record.tip_radius
         out = []
         for face in model.contact_faces:
             found = face_sagitta(model, face)
             if found is None:
                 continue
             sag, extent = found
-            tol = max(
-                feats.sagitta_rho * rho, feats.sagitta_fraction * extent, 4.0 * record.noise
-            ) + (settings.current().geometry.relief_rho * rho)
-            if sag > tol:
+            if sag > sagitta_tolerance(model, extent):
                 out.append(face)
         return out
 

@@ -112,6 +112,7 @@ __all__ = [
     "orthogonal_faces",
     "parallelism_table",
     "perpendicularity_table",
+    "sagitta_tolerance",
     "section_at",
     "side_count",
     "spread_bend",
@@ -606,17 +607,7 @@ def surface_curved(
         if found is None:
             continue
         sag, extent = found
-        tol = (
-            sagitta_tol
-            if sagitta_tol is not None
-            else max(
-                current().features.sagitta_rho * rho,
-                current().features.sagitta_fraction * extent,
-                4.0 * noise,
-            )
-            # bumps and letters under a few contacts bend the fit by up to their height
-            + current().geometry.relief_rho * rho
-        )
+        tol = sagitta_tol if sagitta_tol is not None else sagitta_tolerance(model, extent)
         if sag > tol:
             return True
     bent, folds = _spread_evidence(model, spread_deg)
@@ -1171,9 +1162,9 @@ def _spread_evidence(model: ObjectModel, spread_deg: float) -> tuple[bool, int]:
     spread is weak evidence where the centres cannot tell at all (on two lines, too few) or
     where their estimate itself reaches ``spread_deg`` (:func:`_leans`): the face counts as
     one gentle fold, as a smooth edge does (``folds``); an estimate below it is the sensors'
-    quantisation (a flat face turned between two sensors fires either) or the face's relief. So does a face whose contacts fired
-    sensors that far apart only near its edges: a small cylinder's faces are too narrow to
-    have an inside, a box's are measured flat."""
+    quantisation (a flat face turned between two sensors fires either) or the face's relief.
+    So does a face whose contacts fired sensors that far apart only near its edges: a small
+    cylinder's faces are too narrow to have an inside, a box's are measured flat."""
 
     def outward(turn: float) -> float:
         # a convex object's surface, and the tip centres' offset of it, only turn outwards:
@@ -1280,6 +1271,19 @@ def face_sagitta(model: ObjectModel, face: Face) -> tuple[float, float] | None:
         (__name__, current().features, current().geometry, "sagitta", face.contacts),
         compute,
     )
+
+
+def sagitta_tolerance(model: ObjectModel, extent: float) -> float:
+    """The default sagitta (metres) beyond which a face of ``extent`` (metres) is bent
+    (:func:`surface_curved`): the largest of ``features.sagitta_rho`` × the tip radius,
+    ``features.sagitta_fraction`` × the extent and 4 σ of the record's declared noise, plus
+    ``geometry.relief_rho`` × the tip radius (bumps and letters under a few contacts bend the
+    fit by up to their height)."""
+    rho = model.record.tip_radius
+    feats = current().features
+    return max(
+        feats.sagitta_rho * rho, feats.sagitta_fraction * extent, 4.0 * model.record.noise
+    ) + (current().geometry.relief_rho * rho)
 
 
 def _on_flat_part(model: ObjectModel, face: Face) -> NDArray[np.bool_]:
