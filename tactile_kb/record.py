@@ -31,6 +31,8 @@ from tactile_kb.files import MAX_RECORD_BYTES, InputFileError, atomic_write, rea
 from tactile_kb.types import Vec3
 
 __all__ = [
+    "APPROACHES",
+    "OPEN_ITEMS_SHOWN",
     "READABLE_VERSIONS",
     "RECORD_VERSION",
     "Contact",
@@ -39,6 +41,7 @@ __all__ = [
     "Plane",
     "Vec2",
     "Vec3",
+    "open_items",
 ]
 
 Vec2 = tuple[float, float]
@@ -49,6 +52,37 @@ computes layer contours from the contacts. Records of version 1 (0.1) still load
 
 READABLE_VERSIONS = frozenset({1, RECORD_VERSION})
 """Every record format :meth:`ExplorationRecord.from_json` reads."""
+
+
+APPROACHES = (", approached level", ", straight", " (+ side)", " (- side)")
+"""Endings of an item of :attr:`ExplorationRecord.unreachable` that name one more approach to
+the same item (the completion, :mod:`tactile_kb.completion`, words them so): a face touched at
+one height approached level at its other height, a direction in which the planes close far
+approached straight along it, a top touched along one line probed from either side."""
+
+OPEN_ITEMS_SHOWN = 4
+"""At most this many open items are named in :attr:`ExplorationRecord.open_ending`; the rest
+are counted (``unreachable`` keeps them all)."""
+
+
+def open_items(unreachable: list[str] | tuple[str, ...]) -> list[str]:
+    """Each item of ``unreachable`` once, in order: the approaches to one item
+    (:data:`APPROACHES`) are that item.
+
+    >>> open_items(["the face facing (+1.0, +0.0, +0.0) touched at one height",
+    ...             "the face facing (+1.0, +0.0, +0.0) touched at one height, approached level",
+    ...             "the top facing (+0.0, +0.0, +1.0) touched along one line (- side)"])
+    ['the face facing (+1.0, +0.0, +0.0) touched at one height', \
+'the top facing (+0.0, +0.0, +1.0) touched along one line']
+    """
+    out: dict[str, None] = {}
+    for item in unreachable:
+        for ending in APPROACHES:
+            if item.endswith(ending):
+                item = item[: -len(ending)]
+                break
+        out.setdefault(item, None)
+    return list(out)
 
 
 class Plane(BaseModel):
@@ -183,14 +217,22 @@ class ExplorationRecord(BaseModel):
     @property
     def open_ending(self) -> str:
         """Why the exploration ended without a closed model, in one line; "" when it closed
-        (or when no completion ran, as in records of version 0.1)."""
+        (or when no completion ran, as in records of version 0.1). It names each open item
+        once (:func:`open_items`) and at most :data:`OPEN_ITEMS_SHOWN` of them, and counts
+        the rest; ``unreachable`` lists every item and approach."""
         if self.ending in ("", "closed"):
             return ""
         what = {
             "budget": "the exploration's budget ran out",
             "unreachable": "what stayed open could not be reached",
         }.get(self.ending, f"the exploration ended ({self.ending})")
-        still = "; ".join(self.unreachable) or "unknown"
+        items = open_items(self.unreachable)
+        still = "; ".join(items[:OPEN_ITEMS_SHOWN]) or "unknown"
+        if len(items) > OPEN_ITEMS_SHOWN:
+            still += (
+                f"; and {len(items) - OPEN_ITEMS_SHOWN} more (the record's `unreachable` "
+                "lists them all)"
+            )
         return f"{what} after {self.touches} touches; still open: {still}"
 
     def to_json(self, *, indent: int | None = None) -> str:

@@ -130,6 +130,35 @@ def test_a_spent_budget_is_the_ending_with_its_touch_count() -> None:
     assert "complete" not in rec.contacts_per_phase
 
 
+def test_a_long_ending_names_each_open_face_once() -> None:
+    # one layer and no completion touches: every side of a hexagonal prism is open, each
+    # asked for at its other height twice (along its normal, and level)
+    mesh = solids.prism(6, 0.03, 0.05)
+    rec = StepperExplorer(
+        ServoParams(max_layers=1), completer=model_completer(CompletionParams(touches=0))
+    ).explore(mesh, seed=0)
+    assert rec.ending == "budget"
+    sides = {f"({x:+.1f}, {y:+.1f}, +0.0)" for x, y in _hexagon_normals()}
+    asked = [u for u in rec.unreachable if "touched at one height" in u]
+    assert {u.split("facing ")[1].split(" touched")[0] for u in asked} == sides
+    assert any(u.endswith(", approached level") for u in asked)
+    shown = rec.open_ending.split("still open: ")[1].split("; ")
+    assert shown[-1].startswith("and ")
+    assert shown[-1].endswith(" more (the record's `unreachable` lists them all)")
+    named = shown[:-1]
+    assert len(named) == 4 == len(set(named))
+    assert not any("approached level" in item for item in named)
+    assert all(item.split("facing ")[1].split(" touched")[0] in sides for item in named)
+
+
+def _hexagon_normals() -> list[tuple[float, float]]:
+    """The outward normals (x, y) of the sides of :func:`solids.prism` with six sides, from its
+    mesh: the unit normals of its triangles that are horizontal."""
+    mesh = solids.prism(6, 0.03, 0.05)
+    n = mesh.face_normals[np.abs(mesh.face_normals[:, 2]) < 1e-9]
+    return sorted({(round(float(a), 6) + 0.0, round(float(b), 6) + 0.0) for a, b, _ in n})
+
+
 def test_the_budget_defaults_live_in_the_settings() -> None:
     from tactile_kb import settings
 

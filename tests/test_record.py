@@ -76,6 +76,56 @@ def test_touches_and_path_length() -> None:
     assert rec.path_length == pytest.approx(6.0)
 
 
+FACE = "the face facing (+1.0, +0.0, +0.0) touched at one height"
+TOP = "the top facing (+0.0, +0.2, +1.0) touched along one line"
+
+
+@pytest.mark.parametrize(
+    ("ending", "unreachable", "expected"),
+    [
+        ("closed", [], ""),
+        ("", [], ""),
+        (
+            "unreachable",
+            [],
+            "what stayed open could not be reached after 2 touches; still open: unknown",
+        ),
+        (
+            "unreachable",
+            ["open towards +z"],
+            "what stayed open could not be reached after 2 touches; still open: open towards +z",
+        ),
+        (  # each side of the top and the level approach are the same items again
+            "budget",
+            [FACE, FACE + ", approached level", TOP + " (+ side)", TOP + " (- side)"],
+            f"the exploration's budget ran out after 2 touches; still open: {FACE}; {TOP}",
+        ),
+        (  # six items: four named, two counted
+            "budget",
+            [
+                FACE,
+                FACE + ", approached level",
+                "a blind contact at (+15.0, +6.2, +10.0) mm",
+                "the planes close far towards (+0.0, +1.0, +0.0)",
+                "the planes close far towards (+0.0, +1.0, +0.0), straight",
+                TOP + " (- side)",
+                "the face facing (+0.0, -1.0, +0.0) not touched near the table",
+                "open towards (+0.6, +0.8, +0.0)",
+            ],
+            "the exploration's budget ran out after 2 touches; still open: "
+            f"{FACE}; a blind contact at (+15.0, +6.2, +10.0) mm; the planes close far towards "
+            f"(+0.0, +1.0, +0.0); {TOP}; and 2 more (the record's `unreachable` lists them all)",
+        ),
+    ],
+)
+def test_the_open_ending_names_each_item_once(
+    ending: str, unreachable: list[str], expected: str
+) -> None:
+    rec = _record().model_copy(update={"ending": ending, "unreachable": unreachable})
+    assert rec.open_ending == expected
+    assert rec.unreachable == unreachable  # the record keeps every item and approach
+
+
 def test_bad_json_is_located() -> None:
     with pytest.raises(RecordError, match=r"^r\.json:1:2: not JSON"):
         ExplorationRecord.from_json("{x", file="r.json")
