@@ -1428,17 +1428,7 @@ class ModelCompleter:
                 f"facets are no faces to touch at two heights ({record.touches} touches, "
                 f"{record.touches - self._start[0]} of them by the completion)",
             )
-        wanted = [
-            p
-            for p in completion_probes(model, height_gap=self.params.height_gap)
-            if self._allowed(p)
-        ]
-        # each item once, though probes at two heights or ends share its reason
-        open_items = list(
-            dict.fromkeys(p.reason for p in wanted if not p.reason.startswith(_TESTS))
-        )
-        if model.polyhedron is None and not wanted:
-            open_items = [model.open_reason or "the model is open"]
+        wanted, open_items = self._open(model)
         attempts = self.params.budget()[2]
         todo = [p for p in wanted if self._tried[p.reason] < attempts]
         probe: Probe | None = None
@@ -1490,6 +1480,34 @@ class ModelCompleter:
         elif probe.reason.startswith(_TESTS):
             self._path_probes += 1
         return probe
+
+    def _open(self, model: ObjectModel) -> tuple[list[Probe], list[str]]:
+        """The probes ``model`` asks for (those :meth:`_allowed`), and the items that hold the
+        completion open, each once (probes at two heights or ends share their item)."""
+        wanted = [
+            p
+            for p in completion_probes(model, height_gap=self.params.height_gap)
+            if self._allowed(p)
+        ]
+        open_items = list(
+            dict.fromkeys(p.reason for p in wanted if not p.reason.startswith(_TESTS))
+        )
+        if model.polyhedron is None and not wanted:
+            open_items = [model.open_reason or "the model is open"]
+        return wanted, open_items
+
+    def still_open(self, record: ExplorationRecord) -> tuple[str, ...]:
+        """What holds the completion open after ``record``, each item once, as an ending's
+        ``unreachable`` names it; () when nothing does or the model cannot be built. The
+        controller asks when its motion budget ends the exploration before the completion
+        does (:meth:`tactile_kb.touch.servo.Controller._complete`)."""
+        try:
+            model = self._model(record)
+        except (TactileKBError, np.linalg.LinAlgError, ValueError):
+            return ()
+        if model.polyhedron is not None and centres_on_sphere(model):
+            return ()
+        return tuple(self._open(model)[1])
 
     def _choose(
         self, todo: list[Probe], record: ExplorationRecord, last: tuple[Probe, bool] | None

@@ -159,6 +159,57 @@ def _hexagon_normals() -> list[tuple[float, float]]:
     return sorted({(round(float(a), 6) + 0.0, round(float(b), 6) + 0.0) for a, b, _ in n})
 
 
+@pytest.mark.parametrize("motions", [150, 200, 250])
+def test_a_motion_budget_that_ends_the_exploration_names_what_stayed_open(motions: int) -> None:
+    # one layer round a hexagonal prism, then the top and the completion, until the motion
+    # budget stops them: the ending names the sides touched at one height so far
+    mesh = solids.prism(6, 0.03, 0.05)
+    rec = StepperExplorer(
+        ServoParams(max_layers=1, max_motions=motions), completer=model_completer()
+    ).explore(mesh, seed=0)
+    assert rec.ending == "budget"
+    assert any(f"motion budget of {motions} exhausted" in n for n in rec.notes)
+    assert not any(u.startswith("unknown") for u in rec.unreachable)
+    named = {
+        u.split("facing ")[1].split(" touched")[0]
+        for u in rec.unreachable
+        if u.endswith("touched at one height")
+    }
+    # the truth: the sides (planes of the mesh) whose tip centres, a tip radius out, lie at
+    # one height (spanning less than half a tip radius in z)
+    rho = rec.tip_radius
+    one_height = set()
+    for x, y in _hexagon_normals():
+        n = np.array([x, y, 0.0])
+        offset = float(np.max(mesh.vertices @ n))
+        zs = [
+            c.centre[2]
+            for c in rec.contacts
+            if abs(float(np.dot(c.centre, n)) - offset - rho) < 0.001
+        ]
+        if zs and max(zs) - min(zs) < 0.5 * rho:
+            one_height.add(f"({x:+.1f}, {y:+.1f}, +0.0)")
+    assert one_height
+    assert named == one_height
+    assert rec.open_ending.startswith(
+        f"the exploration's budget ran out after {rec.touches} touches"
+    )
+
+
+def test_a_completer_that_cannot_say_what_is_open_leaves_it_unknown() -> None:
+    # a completer with next_probe alone (no still_open), the motion budget spent by the layers
+    from probing import OneProbe
+
+    from tactile_kb.touch.servo import Probe
+
+    probe = Probe((0.0, 0.0, 0.08), (0.0, 0.0, -1.0), 0.05, "the top")
+    rec = StepperExplorer(
+        ServoParams(max_layers=1, max_motions=60), completer=lambda: OneProbe(probe)
+    ).explore(solids.prism(6, 0.03, 0.05), seed=0)
+    assert rec.ending == "budget"
+    assert rec.unreachable == ["unknown (motion budget of 60 exhausted before the completion)"]
+
+
 def test_the_budget_defaults_live_in_the_settings() -> None:
     from tactile_kb import settings
 

@@ -347,7 +347,11 @@ class Ending:
 class Completer(Protocol):
     """What drives the completion after contour following (see :mod:`tactile_kb.completion`):
     given the record so far and the outcome of the previous probe (None at the start), the next
-    :class:`Probe`, or the :class:`Ending`."""
+    :class:`Probe`, or the :class:`Ending`.
+
+    A completer may also have ``still_open(record) -> tuple[str, ...]``, what holds it open
+    after ``record``: when the motion budget (``ServoParams.max_motions``) ends the exploration
+    first, the ending names those items (without it: ``unknown (…)``)."""
 
     def next_probe(
         self, record: ExplorationRecord, last: tuple[Probe, bool] | None
@@ -744,7 +748,7 @@ class Controller:
         last: tuple[Probe, bool] | None = None
         if self.motions >= self.params.max_motions:
             text = f"motion budget of {self.params.max_motions} exhausted before the completion"
-            self.ending = Ending("budget", text, (f"unknown ({text})",))
+            self.ending = Ending("budget", text, self._still_open(completer, text))
             return
         while True:
             try:
@@ -755,8 +759,16 @@ class Controller:
                 last = (nxt, self.probe(nxt))
             except _Budget as exc:
                 text = f"{exc} ({self.touches} touches): the model was not completed"
-                self.ending = Ending("budget", text, (f"unknown ({exc})",))
+                self._note(text)
+                self.ending = Ending("budget", text, self._still_open(completer, str(exc)))
                 return
+
+    def _still_open(self, completer: Completer, why: str) -> tuple[str, ...]:
+        """What ``completer`` says still holds it open (its ``still_open``), or, when it cannot
+        say, ``unknown (why)``."""
+        ask = getattr(completer, "still_open", None)
+        items = tuple(ask(self.record(complete=False))) if callable(ask) else ()
+        return items or (f"unknown ({why})",)
 
     @property
     def touches(self) -> int:
