@@ -68,7 +68,12 @@ from tactile_kb.geometry.planes import (
     surface_detail,
 )
 from tactile_kb.geometry.polyhedron import Polyhedron
-from tactile_kb.record import ExplorationRecord
+from tactile_kb.record import (
+    APPROACH_LEVEL,
+    APPROACH_SIDES,
+    APPROACH_STRAIGHT,
+    ExplorationRecord,
+)
 from tactile_kb.settings import DEFAULTS, current
 from tactile_kb.touch.explorers import Explorer, WorldExplorer
 from tactile_kb.touch.servo import Ending, Probe
@@ -321,7 +326,7 @@ def completion_probes(model: ObjectModel, *, height_gap: float | None = None) ->
             for z in ends:
                 target = touched.copy()
                 target[2] = z + rho * n[2]
-                into.append(Probe(_v(target), _v(flat), 4.0 * rho, reason + ", approached level"))
+                into.append(Probe(_v(target), _v(flat), 4.0 * rho, reason + APPROACH_LEVEL))
     # a face left out as concave but touched at one height: its quantised normal may be what
     # made it look concave (an overhanging side read as vertical)
     probes += _one_height_probes(model, centres, rho, gap, concave=True)
@@ -425,7 +430,7 @@ def _far_closure_probes(model: ObjectModel, rho: float) -> list[Probe]:
                 _v(halfway),
                 _v(towards / float(np.linalg.norm(towards))),
                 0.5 * size,
-                f"the planes close far towards {_name(towards)}, straight",
+                f"the planes close far towards {_name(towards)}" + APPROACH_STRAIGHT,
             )
         )
     return out
@@ -1269,14 +1274,14 @@ def _top_probes(face: Face, ring: FloatArray, centres: FloatArray, rho: float) -
     top = float(ring[:, 2].max()) + rho
     reach = float(np.ptp(ring[:, 2])) + 4.0 * rho
     out = []
-    for sign, side in ((1.0, "+"), (-1.0, "-")):
+    for sign, side in APPROACH_SIDES.items():
         xy = mid + sign * 0.5 * half * across
         out.append(
             Probe(
                 (float(xy[0]), float(xy[1]), top),
                 (0.0, 0.0, 1.0),
                 reach,
-                f"the top facing {_name(n)} touched along one line ({side} side)",
+                f"the top facing {_name(n)} touched along one line" + side,
             )
         )
     return out
@@ -1364,6 +1369,9 @@ def _v(a: FloatArray) -> tuple[float, float, float]:
     return (float(a[0]), float(a[1]), float(a[2]))
 
 
+_BUILD_ERRORS = (TactileKBError, np.linalg.LinAlgError, ValueError)
+"""What building the model of a record so far may raise: the completion then ends."""
+
 _MODEL_INPUTS = {"contacts", "layers", "noise", "tip_radius", "sensor_directions"}
 """The fields of a record :func:`~tactile_kb.geometry.model.build_model` reads."""
 
@@ -1418,7 +1426,7 @@ class ModelCompleter:
             self._start = (record.touches, record.path_length)
         try:
             model = self._model(record)
-        except (TactileKBError, np.linalg.LinAlgError, ValueError) as exc:
+        except _BUILD_ERRORS as exc:
             text = f"the model cannot be built after {record.touches} touches: {exc}"
             return Ending("unreachable", text, (str(exc),))
         if model.polyhedron is not None and centres_on_sphere(model):
@@ -1503,7 +1511,7 @@ class ModelCompleter:
         does (:meth:`tactile_kb.touch.servo.Controller._complete`)."""
         try:
             model = self._model(record)
-        except (TactileKBError, np.linalg.LinAlgError, ValueError):
+        except _BUILD_ERRORS:
             return ()
         if model.polyhedron is not None and centres_on_sphere(model):
             return ()

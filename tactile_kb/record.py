@@ -32,6 +32,9 @@ from tactile_kb.types import Vec3
 
 __all__ = [
     "APPROACHES",
+    "APPROACH_LEVEL",
+    "APPROACH_SIDES",
+    "APPROACH_STRAIGHT",
     "OPEN_ITEMS_SHOWN",
     "READABLE_VERSIONS",
     "RECORD_VERSION",
@@ -54,11 +57,20 @@ READABLE_VERSIONS = frozenset({1, RECORD_VERSION})
 """Every record format :meth:`ExplorationRecord.from_json` reads."""
 
 
-APPROACHES = (", approached level", ", straight", " (+ side)", " (- side)")
+APPROACH_LEVEL = ", approached level"
+"""The ending of the item of a face touched at one height, approached level at its other
+height (:mod:`tactile_kb.completion` words its items with these endings)."""
+
+APPROACH_STRAIGHT = ", straight"
+"""The ending of the item of a direction in which the planes close far, approached straight
+along it."""
+
+APPROACH_SIDES = {1.0: " (+ side)", -1.0: " (- side)"}
+"""The endings of the items of a top touched along one line, probed from either side of it."""
+
+APPROACHES = (APPROACH_LEVEL, APPROACH_STRAIGHT, *APPROACH_SIDES.values())
 """Endings of an item of :attr:`ExplorationRecord.unreachable` that name one more approach to
-the same item (the completion, :mod:`tactile_kb.completion`, words them so): a face touched at
-one height approached level at its other height, a direction in which the planes close far
-approached straight along it, a top touched along one line probed from either side."""
+the same item."""
 
 OPEN_ITEMS_SHOWN = 4
 """At most this many open items are named in :attr:`ExplorationRecord.open_ending`; the rest
