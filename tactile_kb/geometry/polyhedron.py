@@ -51,6 +51,8 @@ __all__ = [
     "collapse_short_edges",
     "face_width",
     "open_directions",
+    "opposed",
+    "opposed_edges",
     "polyhedron_from_planes",
     "vertex_covariances",
 ]
@@ -62,6 +64,47 @@ DEFAULT_MERGE_FRACTION = DEFAULTS.geometry.merge_fraction
 Noisy planes that should meet in one vertex (a pyramid's apex, the four-face vertices of an
 octahedron) meet in a cluster of nearby vertices a millimetre or two apart; 3 % of the
 diameter (3 mm for a 10 cm object) merges them while keeping real edges."""
+
+
+def opposed(
+    active: NDArray[np.bool_], normals: FloatArray, tolerance_deg: float
+) -> NDArray[np.bool_]:
+    """(V, V) whether a plane active at one vertex and a plane active at the other face away
+    from each other: ``active`` (V, P) marks the planes through each vertex, ``normals`` (P, 3)
+    are their unit outward normals, antiparallel within ``tolerance_deg``.
+
+    The planes of one corner never do (they would enclose no volume there), so two such
+    vertices are the ends of a thickness, however short: a plate's 8 mm edge between its top
+    and its bottom, never one corner that noisy planes split
+    (:func:`polyhedron_from_planes` merges no such pair, :func:`collapse_short_edges` collapses
+    no such edge)."""
+    anti = (normals @ normals.T <= -math.cos(math.radians(tolerance_deg))).astype(np.int64)
+    a = active.astype(np.int64)
+    return np.asarray((a @ anti @ a.T) > 0, dtype=bool)
+
+
+def opposed_edges(poly: Polyhedron, tolerance_deg: float | None = None) -> NDArray[np.bool_]:
+    """(E,) whether each edge of ``poly`` runs between faces that face away from each other,
+    one at each of its corners (:func:`opposed`; ``tolerance_deg`` by default
+    ``features.tolerance_deg``). A corner that noisy planes split never does, so a short
+    edge that does is a thickness (a plate's), not a split corner. Long edges often do too:
+    every edge of a box, or of an octahedron, whose opposite faces are parallel.
+
+    >>> import numpy as np
+    >>> n = np.vstack([np.eye(3), -np.eye(3)])
+    >>> plate = polyhedron_from_planes(n, [0.1, 0.1, 0.004, 0.1, 0.1, 0.004])
+    >>> short = plate.edge_lengths() < 0.01
+    >>> np.round(plate.edge_lengths()[short], 3).tolist(), bool(opposed_edges(plate)[short].all())
+    ([0.008, 0.008, 0.008, 0.008], True)
+    """
+    if tolerance_deg is None:
+        tolerance_deg = current().features.tolerance_deg
+    at = np.zeros((len(poly.vertices), len(poly.faces)), dtype=bool)
+    for f, ring in enumerate(poly.faces):
+        at[list(ring), f] = True
+    e = np.asarray(poly.edges, dtype=np.intp).reshape(-1, 2)
+    far = opposed(at, np.asarray(poly.normals, dtype=float), tolerance_deg)
+    return np.asarray(far[e[:, 0], e[:, 1]], dtype=bool)
 
 
 @dataclass(frozen=True, eq=False)
@@ -472,15 +515,17 @@ def polyhedron_from_planes(
         merge_fraction = current().geometry.merge_fraction
     n, d = _as_planes(normals, offsets)
     hint = None if interior is None else np.asarray(interior, dtype=float).reshape(-1)
+    apart = float(current().features.tolerance_deg)
     key = (
         n.tobytes(),
         d.tobytes(),
         None if hint is None else hint.tobytes(),
         None if tol is None else float(tol),
         float(merge_fraction),
+        apart,
     )
     mf = float(merge_fraction)
-    built = _BUILT.get(key, lambda: _build(n, d, tol, mf, hint))
+    built = _BUILT.get(key, lambda: _build(n, d, tol, mf, hint, apart))
     if built.early is not None:
         raise built.early()
     if bound is not None:
@@ -511,7 +556,9 @@ class _Built:
     late: Callable[[], GeometryError] | None
 
 
-_BUILT: Memo[tuple[bytes, bytes, bytes | None, float | None, float], _Built] = Memo(_BUILT_SIZE)
+_BUILT: Memo[tuple[bytes, bytes, bytes | None, float | None, float, float], _Built] = Memo(
+    _BUILT_SIZE
+)
 
 
 def _maker(exc: GeometryError) -> Callable[[], GeometryError]:
@@ -539,7 +586,12 @@ def _frozen(poly: Polyhedron) -> Polyhedron:
 
 
 def _build(
-    n: FloatArray, d: FloatArray, tol: float | None, merge_fraction: float, hint: FloatArray | None
+    n: FloatArray,
+    d: FloatArray,
+    tol: float | None,
+    merge_fraction: float,
+    hint: FloatArray | None,
+    apart_deg: float,
 ) -> _Built:
     """:func:`polyhedron_from_planes` of the normalised planes ``n``, ``d``, without the
     ``bound`` test (made on ``raw`` by the caller)."""
@@ -578,11 +630,26 @@ def _build(
         return _Built(_maker(GeometryError(message)), empty, None, None)
     raw = np.asarray(hs.intersections, dtype=float)
     raw.flags.writeable = False
-    try:
-        poly = _topology(n, d, tol, merge_fraction, raw, hs.dual_facets)
-    except GeometryError as exc:
-        return _Built(None, raw, None, _maker(exc))
-    return _Built(None, raw, _frozen(poly), None)
+    diam = float(np.ptp(raw, axis=0).max()) if len(raw) else 0.0
+    merge = tol if tol is not None else merge_fraction * diam
+    first: GeometryError | None = None
+    for _ in range(MERGE_RETRIES + 1):
+        try:
+            poly = _topology(n, d, merge, merge_fraction, raw, hs.dual_facets, apart_deg)
+        except GeometryError as exc:  # merged into no polyhedron: merge less
+            first = first or exc
+            merge *= 0.5
+            continue
+        return _Built(None, raw, _frozen(poly), None)
+    assert first is not None
+    return _Built(None, raw, None, _maker(first))
+
+
+MERGE_RETRIES = 3
+"""When the merged vertices make no polyhedron (its faces shrank to edges and Euler's formula
+fails), :func:`polyhedron_from_planes` merges again within half the distance, at most this
+many times: a bar lying on the table, 1 cm across and 40 cm long, has the corners of its end
+within 3 % of its diameter, and merged they leave no end face."""
 
 
 def _topology(
@@ -592,24 +659,28 @@ def _topology(
     merge_fraction: float,
     raw: FloatArray,
     facets: list[list[int]],
+    apart_deg: float,
 ) -> Polyhedron:
     """The polyhedron of Qhull's vertices ``raw`` and the planes active at each
-    (``facets``): merged vertices, faces, topology."""
+    (``facets``): merged vertices, faces, topology. Vertices on planes that face away from
+    each other within ``apart_deg`` are never merged (:func:`opposed`): a 30 cm plate's
+    top and bottom corners lie within 3 % of its diameter when it is under 12.7 mm thick."""
     # tolerance: the exact activity of every plane at every raw vertex, by distance
     diam = float(np.ptp(raw, axis=0).max()) if len(raw) else 0.0
     merge_tol = tol if tol is not None else merge_fraction * diam
     eps = max(1e-9 * diam, 1e-12)
-    if len(raw) > 1 and merge_tol > 0:  # single linkage: connected components of close pairs
-        close = np.linalg.norm(raw[:, None, :] - raw[None, :, :], axis=2) <= merge_tol
-        labels = _components(close)
-    else:
-        labels = np.arange(len(raw))
-    k = int(labels.max()) + 1 if len(raw) else 0
-    # active[v, p]: plane p passes through vertex v (Qhull's facet, or within eps of a member)
+    # hit[v, p]: plane p passes through raw vertex v (Qhull's facet, or within eps of a member)
     hit = np.abs(raw @ n.T - d[None, :]) <= eps
     sizes = [len(f) for f in facets]
     flat = np.fromiter(itertools.chain.from_iterable(facets), dtype=np.intp, count=sum(sizes))
     hit[np.repeat(np.arange(len(facets)), sizes), flat] = True
+    if len(raw) > 1 and merge_tol > 0:  # single linkage: connected components of close pairs
+        close = np.linalg.norm(raw[:, None, :] - raw[None, :, :], axis=2) <= merge_tol
+        close &= ~opposed(hit, n, apart_deg)  # a plate's top and bottom corners stay apart
+        labels = _components(close)
+    else:
+        labels = np.arange(len(raw))
+    k = int(labels.max()) + 1 if len(raw) else 0
     active = np.zeros((k, len(n)), dtype=bool)
     np.logical_or.at(active, labels, hit)
     verts = _cluster_vertices(raw, labels, k, active, n, d, 2 * merge_tol + eps)
@@ -831,6 +902,8 @@ def collapse_short_edges(
     u = (poly.vertices[e[:, 1]] - poly.vertices[e[:, 0]]) / np.maximum(lengths, 1e-300)[:, None]
     sig = np.sqrt(np.einsum("ei,eij,ej->e", u, cov[e[:, 0]] + cov[e[:, 1]], u))
     short = (lengths < sigmas * sig) & (lengths < max_fraction * float(np.median(lengths)))
+    if short.any():
+        short &= ~opposed_edges(poly)  # a plate's thickness is no split vertex
     if not short.any():
         return poly
     close = np.zeros((len(poly.vertices),) * 2, dtype=bool)
