@@ -424,8 +424,20 @@ def _one_object(mesh: trimesh.Trimesh, label: str, notes: list[str]) -> trimesh.
     limits = current().objects
     bodies = list(mesh.split(only_watertight=False))
     sizes = np.array([float(np.linalg.norm(b.extents)) for b in bodies])
-    volumes = np.array([float(np.prod(b.extents)) for b in bodies])
     main = int(np.argmax(sizes))
+    inside = _enclosed(bodies, main)
+    if inside:
+        notes.append(
+            f"{len(inside)} shell(s) inside the object dropped (a cavity or an enclosed part: "
+            "the finger touches only the outside)"
+        )
+        gone = set(inside)
+        bodies = [b for k, b in enumerate(bodies) if k not in gone]
+        if len(bodies) == 1:
+            return bodies[0]
+        sizes = np.array([float(np.linalg.norm(b.extents)) for b in bodies])
+        main = int(np.argmax(sizes))
+    volumes = np.array([float(np.prod(b.extents)) for b in bodies])
     reach = limits.join_fraction * sizes[main]
     # only the largest bodies may be parts: a mesh of thousands of loose triangles would
     # otherwise take hours; pairs whose bounding boxes lie further apart than ``reach`` are
@@ -482,6 +494,38 @@ def _one_object(mesh: trimesh.Trimesh, label: str, notes: list[str]) -> trimesh.
     return joined
 
 
+ENCLOSED_POINTS = 200
+"""At most this many vertices of a body are tested inside the object (:func:`_enclosed`)."""
+
+
+def _enclosed(bodies: list[trimesh.Trimesh], outer: int) -> list[int]:
+    """The bodies that lie inside the closed body ``bodies[outer]``: a cavity's inner wall (a
+    hollow part's, its triangles facing inwards) or a part modelled inside another, which no
+    finger reaches. Each is judged on at most :data:`ENCLOSED_POINTS` of its vertices, all of
+    them tested in one call of trimesh's ray test."""
+    shell = bodies[outer]
+    if not shell.is_watertight:
+        return []
+    lo, hi = shell.bounds
+    which, points = [], []
+    for k, body in enumerate(bodies):
+        blo, bhi = body.bounds
+        if k == outer or bool(np.any(blo < lo) or np.any(bhi > hi)):
+            continue
+        pts = np.asarray(body.vertices, dtype=float)
+        if len(pts) > ENCLOSED_POINTS:
+            pts = pts[np.linspace(0, len(pts) - 1, ENCLOSED_POINTS).astype(int)]
+        which.append(k)
+        points.append(pts)
+    if not which:
+        return []
+    with np.errstate(all="ignore"), warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        inside = np.asarray(shell.contains(np.vstack(points)), dtype=bool)
+    ends = np.cumsum([len(p) for p in points])
+    return [k for k, part in zip(which, np.split(inside, ends[:-1]), strict=True) if part.all()]
+
+
 def _gap(a: trimesh.Trimesh, b: trimesh.Trimesh, reach: float) -> float:
     """The distance between bodies ``a`` and ``b`` (from at most 2000 vertices of each to the
     other's surface; 0 when closed bodies share volume, :func:`_overlap`), or infinity when
@@ -507,7 +551,9 @@ def _overlap(a: trimesh.Trimesh, b: trimesh.Trimesh) -> bool:
     if bool(np.any(alo >= bhi) or np.any(blo >= ahi)):
         return False
     try:
-        common = trimesh.boolean.intersection([a, b], engine="manifold")
+        with np.errstate(all="ignore"), warnings.catch_warnings():
+            warnings.simplefilter("ignore")  # a body with no volume has no centre of mass
+            common = trimesh.boolean.intersection([a, b], engine="manifold")
     except Exception:  # the engine refused them: their distance decides
         return False
     return isinstance(common, trimesh.Trimesh) and len(common.faces) > 0 and bool(common.volume > 0)

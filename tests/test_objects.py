@@ -412,6 +412,47 @@ def test_pieces_that_overlap_are_one_object_however_many() -> None:
     assert slab.metadata[NOTES_KEY][0].startswith("100 parts under")
 
 
+INSIDE_NOTE = (
+    "1 shell(s) inside the object dropped (a cavity or an enclosed part: the finger touches "
+    "only the outside)"
+)
+
+
+@pytest.mark.parametrize("facing", ["inwards", "outwards"])
+def test_a_cavity_or_an_enclosed_part_is_dropped_with_a_note(facing: str) -> None:
+    # a hollow box's inner wall (its triangles facing into the cavity), or a part modelled
+    # inside another: no finger reaches it, and it is no second object
+    outer = trimesh.creation.box((0.08, 0.05, 0.04))
+    inner = trimesh.creation.box((0.04, 0.025, 0.02))
+    inner.apply_translation((0.01, 0.005, 0.0))
+    faces = inner.faces[:, ::-1] if facing == "inwards" else inner.faces
+    shell = trimesh.Trimesh(inner.vertices, faces, process=False)
+    obj = load_object(trimesh.util.concatenate([outer, shell]), name="hollow")
+    assert obj.body_count == 1
+    assert obj.extents == pytest.approx((0.08, 0.05, 0.04), abs=1e-9)
+    assert obj.volume == pytest.approx(0.08 * 0.05 * 0.04, rel=1e-9)
+    assert obj.metadata[NOTES_KEY] == [INSIDE_NOTE]
+    # the same box beside the object, not inside it, is a second object
+    beside = shell.copy()
+    beside.apply_translation((0.1, 0.0, 0.0))
+    with pytest.raises(ObjectError, match="the mesh holds 2 separate objects"):
+        load_object(trimesh.util.concatenate([outer, beside]), name="pair")
+
+
+def test_a_box_with_a_corner_moved_onto_another_loads_without_warnings(tmp_path: Path) -> None:
+    # pytest turns warnings into errors: read from an STL (a triangle soup), the body of no
+    # volume this leaves had trimesh's mass properties divide by zero while it was tested
+    # against the rest
+    box = trimesh.creation.box((0.08, 0.05, 0.04))
+    v = box.vertices.copy()
+    v[0] = v[1]
+    path = tmp_path / "dented.stl"
+    trimesh.Trimesh(v, box.faces, process=False).export(path)
+    obj = load_object(path)
+    # what is left: the box less the wedge between the moved corner and its three edges
+    assert obj.volume == pytest.approx(0.08 * 0.05 * 0.04 - 0.08 * 0.05 * 0.04 / 6, rel=1e-6)
+
+
 def test_thousands_of_loose_triangles_beside_an_object_are_specks() -> None:
     # a scan's debris: 2000 loose triangles of about a millimetre in and around a box; only the
     # largest bodies are tried as parts (MAX_PARTS), the rest are specks
@@ -425,10 +466,17 @@ def test_thousands_of_loose_triangles_beside_an_object_are_specks() -> None:
     ]
     mesh = load_object(trimesh.util.concatenate([box, *loose]), name="debris")
     notes = mesh.metadata[NOTES_KEY]
-    dropped = int(notes[0].split()[0])
-    parts = int(notes[1].split()[0]) if "parts under" in notes[1] else 1
-    assert dropped + parts == 2001
-    assert parts <= MAX_PARTS
+    inside = int(notes[0].split()[0]) if "inside the object" in notes[0] else 0
+    dropped = int(notes[1].split()[0]) if inside else int(notes[0].split()[0])
+    parts = [int(n.split()[0]) for n in notes if "parts under" in n] or [1]
+    assert inside + dropped + parts[0] == 2001
+    # the triangles inside the box are the ones dropped as inside it
+    centres = [t.vertices.mean(axis=0) for t in loose]
+    deep = sum(
+        bool(np.all(np.abs(c) < (0.03 - 0.004, 0.025 - 0.004, 0.02 - 0.004))) for c in centres
+    )
+    assert deep <= inside <= 2000
+    assert parts[0] <= MAX_PARTS
     assert mesh.extents == pytest.approx((0.06, 0.05, 0.04), abs=0.012)  # kept parts stick out
 
 

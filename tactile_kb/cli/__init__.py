@@ -23,6 +23,7 @@ import argparse
 import importlib
 import os
 import sys
+import warnings
 from collections.abc import Sequence
 from typing import NoReturn
 
@@ -129,14 +130,19 @@ def main(argv: Sequence[str] | None = None) -> int:
         return EXIT_USAGE
     prog = f"tactile-kb {args.command}"
     try:
-        chosen = chosen_settings(args)
-        if chosen is None:
-            code: int = args.func(args)
-        else:
-            from tactile_kb.settings import use
+        with warnings.catch_warnings():
+            # the mesh library's numeric warnings on a messy mesh (the mass properties of a
+            # body with no volume) are nothing a user can act on; the notes say what was
+            # done to the mesh
+            warnings.filterwarnings("ignore", category=RuntimeWarning, module="trimesh")
+            chosen = chosen_settings(args)
+            if chosen is None:
+                code: int = args.func(args)
+            else:
+                from tactile_kb.settings import use
 
-            with use(chosen):
-                code = args.func(args)
+                with use(chosen):
+                    code = args.func(args)
     except TactileKBError as exc:
         return report(exc, prog)
     except KeyboardInterrupt:
