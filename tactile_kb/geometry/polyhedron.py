@@ -67,20 +67,30 @@ diameter (3 mm for a 10 cm object) merges them while keeping real edges."""
 
 
 def opposed(
-    active: NDArray[np.bool_], normals: FloatArray, tolerance_deg: float
+    active: NDArray[np.bool_], normals: FloatArray, tolerance_deg: float, pairs: NDArray[np.intp]
 ) -> NDArray[np.bool_]:
-    """(V, V) whether a plane active at one vertex and a plane active at the other face away
-    from each other: ``active`` (V, P) marks the planes through each vertex, ``normals`` (P, 3)
-    are their unit outward normals, antiparallel within ``tolerance_deg``.
+    """(K,) for each pair of vertices in ``pairs`` (K, 2), whether a plane active at one and a
+    plane active at the other face away from each other: ``active`` (V, P) marks the planes
+    through each vertex, ``normals`` (P, 3) are their unit outward normals, antiparallel
+    within ``tolerance_deg``.
 
     The planes of one corner never do (they would enclose no volume there), so two such
     vertices are the ends of a thickness, however short: a plate's 8 mm edge between its top
     and its bottom, never one corner that noisy planes split
     (:func:`polyhedron_from_planes` merges no such pair, :func:`collapse_short_edges` collapses
     no such edge)."""
-    anti = (normals @ normals.T <= -math.cos(math.radians(tolerance_deg))).astype(np.int64)
-    a = active.astype(np.int64)
-    return np.asarray((a @ anti @ a.T) > 0, dtype=bool)
+    pairs = np.asarray(pairs, dtype=np.intp).reshape(-1, 2)
+    if len(pairs) == 0:
+        return np.zeros(0, dtype=bool)
+    used, local = np.unique(pairs, return_inverse=True)
+    rows, cols = np.nonzero(active[used])
+    counts = np.bincount(rows, minlength=len(used))
+    # each vertex's normals, padded with zeros (a zero is never antiparallel to anything)
+    mine = np.zeros((len(used), max(int(counts.max()), 1), 3))
+    mine[rows, np.arange(len(rows)) - (np.cumsum(counts) - counts)[rows]] = normals[cols]
+    local = local.reshape(-1, 2)
+    dots = np.einsum("pai,pbi->pab", mine[local[:, 0]], mine[local[:, 1]])
+    return np.asarray((dots <= -math.cos(math.radians(tolerance_deg))).any(axis=(1, 2)), dtype=bool)
 
 
 def opposed_edges(poly: Polyhedron, tolerance_deg: float | None = None) -> NDArray[np.bool_]:
@@ -103,8 +113,7 @@ def opposed_edges(poly: Polyhedron, tolerance_deg: float | None = None) -> NDArr
     for f, ring in enumerate(poly.faces):
         at[list(ring), f] = True
     e = np.asarray(poly.edges, dtype=np.intp).reshape(-1, 2)
-    far = opposed(at, np.asarray(poly.normals, dtype=float), tolerance_deg)
-    return np.asarray(far[e[:, 0], e[:, 1]], dtype=bool)
+    return opposed(at, np.asarray(poly.normals, dtype=float), tolerance_deg, e)
 
 
 @dataclass(frozen=True, eq=False)
@@ -676,7 +685,9 @@ def _topology(
     hit[np.repeat(np.arange(len(facets)), sizes), flat] = True
     if len(raw) > 1 and merge_tol > 0:  # single linkage: connected components of close pairs
         close = np.linalg.norm(raw[:, None, :] - raw[None, :, :], axis=2) <= merge_tol
-        close &= ~opposed(hit, n, apart_deg)  # a plate's top and bottom corners stay apart
+        pairs = np.argwhere(np.triu(close, 1))
+        apart = pairs[opposed(hit, n, apart_deg, pairs)]  # a plate's top and bottom corners
+        close[apart[:, 0], apart[:, 1]] = close[apart[:, 1], apart[:, 0]] = False
         labels = _components(close)
     else:
         labels = np.arange(len(raw))
