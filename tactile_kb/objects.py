@@ -191,8 +191,8 @@ def load_object(obj: ObjectLike, *, name: str | None = None) -> trimesh.Trimesh:
         (even centred on it).
         The tip's own limit is :func:`check_thickness`.
 
-    Seams closer than ``objects.weld_fraction`` of the size are welded, specks are dropped and
-    holes filled (``trimesh.repair.fill_holes``); a mesh trimesh cannot
+    Seams closer than ``objects.weld_fraction`` of the size are welded, shells inside the
+    object and specks are dropped and holes filled (``trimesh.repair.fill_holes``); a mesh trimesh cannot
     close is explored as it is. Each such change is listed in ``mesh.metadata[NOTES_KEY]``.
     A mesh that reaches beyond the workspace in x or y (a scan in its scanner's coordinates)
     is centred over the origin; the shifts are ``mesh.metadata["moved_xy"]`` and
@@ -419,7 +419,9 @@ def _one_object(mesh: trimesh.Trimesh, label: str, notes: list[str]) -> trimesh.
     mug and its handle modelled apart, islands of surface between a scan's holes — and stay,
     closed ones joined by their union (manifold3d). Every other body must be a floating speck
     (under :data:`SPECK_FRACTION` of the size or ``objects.speck_volume_fraction`` of the
-    bounding volume), and is dropped; a larger one is a second object, refused.
+    bounding volume), and is dropped; a larger one is a second object, refused. Bodies inside
+    the largest one (:func:`_enclosed`: a cavity's wall, a part modelled inside another) are
+    dropped first: no finger reaches them.
     """
     limits = current().objects
     bodies = list(mesh.split(only_watertight=False))

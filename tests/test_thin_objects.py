@@ -1,13 +1,17 @@
-"""A thin square plate is a rectangular parallelepiped, not a cube.
+"""Thin objects: a plate is a rectangular parallelepiped, a bar lying on the table a prism.
 
 A plate's edges along its thickness are shorter than ``features.rel_tol`` (6 %) of its mean
 edge, the length below which an edge counts as a corner that noisy planes split
 (``features.builtin._split_corners``). Taken for corners, they left only the square faces'
 edges, all equal: a 20 × 20 × 0.8 cm tile was answered "OBJECT IS A CUBE" by both rule files.
-Such an edge runs between the plate's two large faces, which face away from each other, and
-the faces of one corner never do. The truth here is the plates' own dimensions (edges of
-200, 200 and 8 mm are not equal), and an octahedron, whose corners four faces share, keeps
-its corners joined.
+Its top and bottom corners also lie within 3 % of its diameter (``geometry.merge_fraction``),
+and a larger or noisier tile had them merged, leaving no polyhedron. Such an edge runs
+between faces that face away from each other, and the faces of one corner never do
+(``geometry.polyhedron.opposed``). A bar's end, 12 mm across and 40 cm long, has its corners
+within that distance too, whatever its faces; merged into no polyhedron, they are merged again
+within half the distance (``polyhedron.MERGE_RETRIES``). The truth here is the objects' own
+dimensions (edges of 200, 200 and 8 mm are not equal; a bar's corners, faces and volume), and
+an octahedron, whose corners four faces share, keeps its split corners joined.
 """
 
 from __future__ import annotations

@@ -594,6 +594,13 @@ def _frozen(poly: Polyhedron) -> Polyhedron:
     return poly
 
 
+MERGE_RETRIES = 3
+"""When the merged vertices make no polyhedron (its faces shrank to edges and Euler's formula
+fails), :func:`polyhedron_from_planes` merges again within half the distance, at most this
+many times: a bar lying on the table, 1 cm across and 40 cm long, has the corners of its end
+within 3 % of its diameter, and merged they leave no end face."""
+
+
 def _build(
     n: FloatArray,
     d: FloatArray,
@@ -652,13 +659,6 @@ def _build(
         return _Built(None, raw, _frozen(poly), None)
     assert first is not None
     return _Built(None, raw, None, _maker(first))
-
-
-MERGE_RETRIES = 3
-"""When the merged vertices make no polyhedron (its faces shrank to edges and Euler's formula
-fails), :func:`polyhedron_from_planes` merges again within half the distance, at most this
-many times: a bar lying on the table, 1 cm across and 40 cm long, has the corners of its end
-within 3 % of its diameter, and merged they leave no end face."""
 
 
 def _topology(
