@@ -9,8 +9,10 @@ wrong case.
 The families, each in random sizes and turns about z, every instance scanned with its own
 seed:
 
-- ``tile``: square or oblong plates 12-30 cm across and 0.8-2 cm thick (a side lower than the
-  tip's diameter gives one height only), ``parallelepipeds`` rules: a rectangular
+- ``tile``: square or oblong plates 18-30 cm across and 0.76-1.3 cm thick (the tip needs 7.5
+  mm; a side lower than its diameter gives one height only; the thickness is under 6 % of
+  the mean edge, or the corners lie within 3 % of the diameter of each other, where a square
+  tile read as a cube or gave no model), ``parallelepipeds`` rules: a rectangular
   parallelepiped, never a cube;
 - ``flat box``: 10-25 cm across and 2.5-4.5 cm thick (a cereal box lying down, a book),
   ``parallelepipeds`` rules;
@@ -64,7 +66,7 @@ def build(family: str, instance: int) -> tuple[trimesh.Trimesh, str, str, str]:
     turn = float(rng.uniform(0.0, 360.0))
     if family in ("tile", "flat box"):
         lo, hi, t_lo, t_hi = (
-            (0.12, 0.30, 0.008, 0.02) if family == "tile" else (0.10, 0.25, 0.025, 0.045)
+            (0.18, 0.30, 0.0076, 0.013) if family == "tile" else (0.10, 0.25, 0.025, 0.045)
         )
         a = round(float(rng.uniform(lo, hi)), 4)
         b = a if instance % 2 == 0 else round(a * float(rng.uniform(0.5, 0.9)), 4)
