@@ -25,7 +25,6 @@ from __future__ import annotations
 import argparse
 import itertools
 import math
-import multiprocessing
 import statistics
 import sys
 import time
@@ -35,6 +34,7 @@ from dataclasses import dataclass
 import numpy as np
 import shapely.geometry
 import trimesh
+from pool import map_jobs
 
 from tactile_kb import solids
 from tactile_kb.pipeline import classify
@@ -281,11 +281,7 @@ def main(argv: list[str] | None = None) -> None:
     args = ap.parse_args(argv if argv is not None else [])
     todo = jobs(args.instances, args.seeds, set(args.family))
     t0 = time.perf_counter()
-    if args.workers > 1:
-        with multiprocessing.get_context("fork").Pool(args.workers) as pool:
-            results = pool.map(run_job, todo, chunksize=1)
-    else:
-        results = [run_job(j) for j in todo]
+    results = map_jobs(run_job, todo, args.workers)
     wall = time.perf_counter() - t0
     head = f"{'family':24s} {'mode':6s} {'right':>9s} {'acc %':>6s} {'t/face':>6s} {'s/obj':>6s} {'max s':>6s}"
     print(head)

@@ -27,13 +27,13 @@ from __future__ import annotations
 
 import argparse
 import math
-import multiprocessing
 import sys
 import time
 from dataclasses import dataclass
 
 import numpy as np
 import trimesh
+from pool import map_jobs
 from versions import versions_line
 
 from tactile_kb import solids
@@ -118,11 +118,7 @@ def main(argv: list[str] | None = None) -> None:
         for noise in (0.0, NOISE)
     ]
     t0 = time.perf_counter()
-    if args.workers > 1:
-        with multiprocessing.get_context("fork").Pool(args.workers) as pool:
-            results = pool.map(run_job, todo, chunksize=1)
-    else:
-        results = [run_job(j) for j in todo]
+    results = map_jobs(run_job, todo, args.workers)
     head = f"{'family':10s} {'level':>5s} {'exact':>7s} {'noisy':>7s}"
     print(head)
     print("-" * len(head))

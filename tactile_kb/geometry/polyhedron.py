@@ -651,7 +651,7 @@ def _build(
     first: GeometryError | None = None
     for _ in range(MERGE_RETRIES + 1):
         try:
-            poly = _topology(n, d, merge, merge_fraction, raw, hs.dual_facets, apart_deg)
+            poly = _topology(n, d, merge, raw, hs.dual_facets, apart_deg)
         except GeometryError as exc:  # merged into no polyhedron: merge less
             first = first or exc
             merge *= 0.5
@@ -664,19 +664,18 @@ def _build(
 def _topology(
     n: FloatArray,
     d: FloatArray,
-    tol: float | None,
-    merge_fraction: float,
+    merge_tol: float,
     raw: FloatArray,
     facets: list[list[int]],
     apart_deg: float,
 ) -> Polyhedron:
     """The polyhedron of Qhull's vertices ``raw`` and the planes active at each
-    (``facets``): merged vertices, faces, topology. Vertices on planes that face away from
-    each other within ``apart_deg`` are never merged (:func:`opposed`): a 30 cm plate's
-    top and bottom corners lie within 3 % of its diameter when it is under 12.7 mm thick."""
+    (``facets``): vertices within ``merge_tol`` merged, faces, topology. Vertices on planes
+    that face away from each other within ``apart_deg`` are never merged (:func:`opposed`):
+    a 30 cm plate's top and bottom corners lie within 3 % of its diameter when it is under
+    12.7 mm thick."""
     # tolerance: the exact activity of every plane at every raw vertex, by distance
     diam = float(np.ptp(raw, axis=0).max()) if len(raw) else 0.0
-    merge_tol = tol if tol is not None else merge_fraction * diam
     eps = max(1e-9 * diam, 1e-12)
     # hit[v, p]: plane p passes through raw vertex v (Qhull's facet, or within eps of a member)
     hit = np.abs(raw @ n.T - d[None, :]) <= eps
