@@ -1477,6 +1477,9 @@ class ModelCompleter:
                 f"{path:.2f} of {allowed:.3g} m of path; {record.touches} touches in "
                 "all): still open: " + "; ".join(open_items),
                 tuple(open_items),
+                f"the completion's budget of {budget} touches"
+                if touches >= budget
+                else f"the completion's budget of {allowed:.3g} m of path",
             )
         self.probes += 1
         self._tried[probe.reason] += 1

@@ -91,12 +91,12 @@ class Classification:
     def summary(self) -> dict[str, Any]:
         """The JSON object of ``tactile-kb classify --json`` (one line per object).
 
-        Its schema is ``tactile_kb/schemas/classification.schema.json``: ``answer`` is the
+        Its schema is ``tactile_kb/schemas/classify.schema.json``: ``answer`` is the
         bare answer and ``report`` the answer with the measures its class reports (as the
         text output prints it); ``touches`` counts sensor OFF→ON events and ``contacts``
-        every contact recorded (touches and slides); ``ending`` is how the completion ended
-        and ``unreachable`` names what it could not touch (a face flat on the table, one the
-        object shadows), never guessed.
+        every contact recorded (touches and slides); ``ending`` is how the completion ended,
+        ``unreachable`` names what it could not touch (a face flat on the table, one the
+        object shadows), never guessed, and ``budget`` which budget ran out.
         """
         return {
             "object": self.object,
@@ -118,6 +118,7 @@ class Classification:
             "notes": list(self.record.notes),
             "ending": self.record.ending,
             "unreachable": list(self.record.unreachable),
+            "budget": self.record.budget,
         }
 
 

@@ -76,6 +76,10 @@ OPEN_ITEMS_SHOWN = 4
 """At most this many open items are named in :attr:`ExplorationRecord.open_ending`; the rest
 are counted (``unreachable`` keeps them all)."""
 
+DEFAULT_BUDGET = "the exploration's budget"
+"""What :attr:`ExplorationRecord.open_ending` says ran out when the record does not name the
+budget (records written before ``budget`` was kept)."""
+
 
 def open_items(unreachable: list[str] | tuple[str, ...]) -> list[str]:
     """Each item of ``unreachable`` once, in order: the approaches to one item
@@ -192,6 +196,12 @@ class ExplorationRecord(BaseModel):
     unreachable: list[str] = Field(
         default_factory=list, description="what stayed open when the completion ended"
     )
+    budget: str = Field(
+        default="",
+        description="with ending 'budget', which budget ran out and its size (\"the "
+        'completion\'s budget of 24 touches", "… of 1.2 m of path", "the motion budget of '
+        "6000 motions\"); '' otherwise, and in records written before it was kept",
+    )
     orientations: list[tuple[int, float, float]] = Field(
         default_factory=list,
         description="(path index, tilt, turn): the head was indexed to (tilt, turn) degrees at "
@@ -235,7 +245,7 @@ class ExplorationRecord(BaseModel):
         if self.ending in ("", "closed"):
             return ""
         what = {
-            "budget": "the exploration's budget ran out",
+            "budget": f"{self.budget or DEFAULT_BUDGET} ran out",
             "unreachable": "what stayed open could not be reached",
         }.get(self.ending, f"the exploration ended ({self.ending})")
         items = open_items(self.unreachable)

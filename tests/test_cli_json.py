@@ -238,6 +238,7 @@ def test_what_stayed_unreachable_is_named_in_the_json(
     validate("classify", row)
     assert row["ending"] == "unreachable"
     assert row["unreachable"] == ["open towards +z"]
+    assert row["budget"] == ""  # no budget ran out
     out = tmp_path / "rec.json"
     assert main(["explore", str(files["cube"]), "--finger", "4", "--out", str(out)]) == 0
     capsys.readouterr()

@@ -13,7 +13,7 @@ import pytest
 import trimesh
 from scanlike import bumped, jittered, rounded_box
 
-from tactile_kb import solids
+from tactile_kb import settings, solids
 from tactile_kb.cli import main
 from tactile_kb.completion import CompletionParams, completing, completion_probes, model_completer
 from tactile_kb.features.builtin import centres_on_sphere
@@ -123,11 +123,29 @@ def test_a_spent_budget_is_the_ending_with_its_touch_count() -> None:
         u.startswith(("open towards", "the face facing", "the top facing")) for u in rec.unreachable
     )
     assert len(set(rec.unreachable)) == len(rec.unreachable)
+    assert rec.budget == "the completion's budget of 0 touches"
     assert rec.open_ending == (
-        f"the exploration's budget ran out after {rec.touches} touches; still open: "
+        f"the completion's budget of 0 touches ran out after {rec.touches} touches; still open: "
         + "; ".join(rec.unreachable)
     )
     assert "complete" not in rec.contacts_per_phase
+
+
+def test_a_spent_path_budget_is_named_with_its_size() -> None:
+    # a path budget of 20 cm (the touched extent's share made negligible) runs out before the
+    # touch budget of 24: the ending names the path and its size
+    mesh = solids.prism(6, 0.03, 0.05)
+    with settings.override(explore={"completion_path_sizes": 1e-6}):
+        rec = StepperExplorer(
+            ServoParams(max_layers=1), completer=model_completer(CompletionParams(path=0.2))
+        ).explore(mesh, seed=0)
+    assert rec.ending == "budget"
+    assert rec.budget == "the completion's budget of 0.2 m of path"
+    assert rec.open_ending.startswith(
+        f"the completion's budget of 0.2 m of path ran out after {rec.touches} touches; "
+    )
+    touched = sum(1 for c in rec.contacts if c.phase == "complete" and c.kind == "touch")
+    assert 0 < touched < 24  # the touch budget was not what ran out
 
 
 def test_a_long_ending_names_each_open_face_once() -> None:
@@ -191,8 +209,9 @@ def test_a_motion_budget_that_ends_the_exploration_names_what_stayed_open(motion
             one_height.add(f"({x:+.1f}, {y:+.1f}, +0.0)")
     assert one_height
     assert named == one_height
+    assert rec.budget == f"the motion budget of {motions} motions"
     assert rec.open_ending.startswith(
-        f"the exploration's budget ran out after {rec.touches} touches"
+        f"the motion budget of {motions} motions ran out after {rec.touches} touches"
     )
 
 
@@ -208,6 +227,7 @@ def test_a_completer_that_cannot_say_what_is_open_leaves_it_unknown() -> None:
     ).explore(solids.prism(6, 0.03, 0.05), seed=0)
     assert rec.ending == "budget"
     assert rec.unreachable == ["unknown (motion budget of 60 exhausted before the completion)"]
+    assert rec.budget == "the motion budget of 60 motions"
 
 
 def test_the_budget_defaults_live_in_the_settings() -> None:
@@ -291,6 +311,7 @@ def test_records_without_an_ending_still_load(tmp_path: Path) -> None:
     old = ExplorationRecord.from_json(json.dumps(data))
     assert old.ending == ""
     assert old.unreachable == []
+    assert old.budget == ""
     assert old.open_ending == ""
 
 

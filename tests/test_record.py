@@ -81,24 +81,34 @@ TOP = "the top facing (+0.0, +0.2, +1.0) touched along one line"
 
 
 @pytest.mark.parametrize(
-    ("ending", "unreachable", "expected"),
+    ("ending", "unreachable", "budget", "expected"),
     [
-        ("closed", [], ""),
-        ("", [], ""),
+        ("closed", [], "", ""),
+        ("", [], "", ""),
         (
             "unreachable",
             [],
+            "",
             "what stayed open could not be reached after 2 touches; still open: unknown",
         ),
         (
             "unreachable",
             ["open towards +z"],
+            "",
             "what stayed open could not be reached after 2 touches; still open: open towards +z",
         ),
         (  # each side of the top and the level approach are the same items again
             "budget",
             [FACE, FACE + ", approached level", TOP + " (+ side)", TOP + " (- side)"],
+            "",  # a record written before the budget was named
             f"the exploration's budget ran out after 2 touches; still open: {FACE}; {TOP}",
+        ),
+        (
+            "budget",
+            ["open towards +z"],
+            "the completion's budget of 1.2 m of path",
+            "the completion's budget of 1.2 m of path ran out after 2 touches; still open: "
+            "open towards +z",
         ),
         (  # six items: four named, two counted
             "budget",
@@ -112,16 +122,19 @@ TOP = "the top facing (+0.0, +0.2, +1.0) touched along one line"
                 "the face facing (+0.0, -1.0, +0.0) not touched near the table",
                 "open towards (+0.6, +0.8, +0.0)",
             ],
-            "the exploration's budget ran out after 2 touches; still open: "
+            "the motion budget of 6000 motions",
+            "the motion budget of 6000 motions ran out after 2 touches; still open: "
             f"{FACE}; a blind contact at (+15.0, +6.2, +10.0) mm; the planes close far towards "
             f"(+0.0, +1.0, +0.0); {TOP}; and 2 more (the record's `unreachable` lists them all)",
         ),
     ],
 )
 def test_the_open_ending_names_each_item_once(
-    ending: str, unreachable: list[str], expected: str
+    ending: str, unreachable: list[str], budget: str, expected: str
 ) -> None:
-    rec = _record().model_copy(update={"ending": ending, "unreachable": unreachable})
+    rec = _record().model_copy(
+        update={"ending": ending, "unreachable": unreachable, "budget": budget}
+    )
     assert rec.open_ending == expected
     assert rec.unreachable == unreachable  # the record keeps every item and approach
 

@@ -337,11 +337,14 @@ class Ending:
     """How a model-driven completion ended: ``"closed"`` (the envelope is closed and every face
     has tip centres at two heights, or every tip centre lies on one sphere), ``"budget"``
     (touches or path ran out) or ``"unreachable"`` (what stayed open cannot be reached);
-    ``message`` says it in one line, ``unreachable`` names what stayed open."""
+    ``message`` says it in one line, ``unreachable`` names what stayed open, and ``budget``
+    (with ``"budget"``) says which budget ran out and its size, as a subject: "the
+    completion's budget of 24 touches", "the motion budget of 6000 motions"."""
 
     status: Literal["closed", "budget", "unreachable"]
     message: str
     unreachable: tuple[str, ...] = ()
+    budget: str = ""
 
 
 class Completer(Protocol):
@@ -645,6 +648,7 @@ class Controller:
             ),
             ending=self.ending.status if self.ending else "",
             unreachable=list(self.ending.unreachable) if self.ending else [],
+            budget=self.ending.budget if self.ending else "",
             orientations=list(self.orientations),
             blind=list(self.blind),
         )
@@ -748,7 +752,9 @@ class Controller:
         last: tuple[Probe, bool] | None = None
         if self.motions >= self.params.max_motions:
             text = f"motion budget of {self.params.max_motions} exhausted before the completion"
-            self.ending = Ending("budget", text, self._still_open(completer, text))
+            self.ending = Ending(
+                "budget", text, self._still_open(completer, text), self._motion_budget
+            )
             return
         while True:
             try:
@@ -760,8 +766,15 @@ class Controller:
             except _Budget as exc:
                 text = f"{exc} ({self.touches} touches): the model was not completed"
                 self._note(text)
-                self.ending = Ending("budget", text, self._still_open(completer, str(exc)))
+                self.ending = Ending(
+                    "budget", text, self._still_open(completer, str(exc)), self._motion_budget
+                )
                 return
+
+    @property
+    def _motion_budget(self) -> str:
+        """The motion budget as an :class:`Ending` names it."""
+        return f"the motion budget of {self.params.max_motions} motions"
 
     def _still_open(self, completer: Completer, why: str) -> tuple[str, ...]:
         """What ``completer`` says still holds it open (its ``still_open``), or, when it cannot
