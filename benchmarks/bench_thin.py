@@ -1,6 +1,7 @@
 """Thin objects: tiles, flat boxes and bars lying on the table, ideal and scan-like.
 
-Run: ``.venv/bin/python benchmarks/bench_thin.py [--instances N] [--workers N] [--levels 0,1,2,3]``
+Run: ``.venv/bin/python benchmarks/bench_thin.py [--instances N] [--workers N] [--levels 0,1,2,3]
+[--family NAME]...``
 (or ``python benchmarks/run.py thin``). It never fails; it prints, per family, perturbation
 level (0: the ideal solid; 1-3: ``tactile_kb.perturb``'s scans) and mode (exact contacts, or
 0.5 mm of contact-position noise), the share of objects given their true label, then every
@@ -19,6 +20,9 @@ seed:
 - ``bar``: bars of equilateral-triangle or square section, 1.2-2 cm across and 20-40 cm long,
   lying on a face, ``polyhedra`` rules: a prism (a square one is a rectangular
   parallelepiped).
+- ``slab``: square or oblong slabs 7-20 cm across and 1.2-2 cm thick (a phone, a sponge, a
+  coaster, a paperback), ``parallelepipeds`` rules: their sides are a little higher than the
+  tip's diameter, so a contour layer placed from the visual hint can run at the top's edge.
 
 The true labels come from the construction, never from the code under test.
 """
@@ -42,6 +46,16 @@ from tactile_kb.pipeline import classify
 
 NOISE = 0.0005
 
+FAMILIES = ("tile", "flat box", "bar", "slab")
+"""The families, in the order their random sizes are seeded (a new one goes last)."""
+
+SIZES = {
+    "tile": (0.18, 0.30, 0.0076, 0.013),
+    "flat box": (0.10, 0.25, 0.025, 0.045),
+    "slab": (0.07, 0.20, 0.012, 0.02),
+}
+"""Box families: the range of the longer side, then of the thickness (metres)."""
+
 
 @dataclass(frozen=True)
 class Job:
@@ -62,12 +76,10 @@ class Outcome:
 
 def build(family: str, instance: int) -> tuple[trimesh.Trimesh, str, str, str]:
     """The object ``instance`` of ``family``: its mesh, rules, true label and description."""
-    rng = np.random.default_rng(1000 * (1 + ["tile", "flat box", "bar"].index(family)) + instance)
+    rng = np.random.default_rng(1000 * (1 + FAMILIES.index(family)) + instance)
     turn = float(rng.uniform(0.0, 360.0))
-    if family in ("tile", "flat box"):
-        lo, hi, t_lo, t_hi = (
-            (0.18, 0.30, 0.0076, 0.013) if family == "tile" else (0.10, 0.25, 0.025, 0.045)
-        )
+    if family in SIZES:
+        lo, hi, t_lo, t_hi = SIZES[family]
         a = round(float(rng.uniform(lo, hi)), 4)
         b = a if instance % 2 == 0 else round(a * float(rng.uniform(0.5, 0.9)), 4)
         t = round(float(rng.uniform(t_lo, t_hi)), 4)
@@ -107,12 +119,14 @@ def main(argv: list[str] | None = None) -> None:
     ap.add_argument("--instances", type=int, default=6, help="random objects per family")
     ap.add_argument("--workers", type=int, default=2, help="processes")
     ap.add_argument("--levels", default="0,1,2,3", help="perturbation levels (0: ideal)")
+    ap.add_argument("--family", action="append", choices=FAMILIES, help="families (default: all)")
     args = ap.parse_args(argv if argv is not None else [])
     levels = [int(x) for x in args.levels.split(",")]
+    families = tuple(args.family or FAMILIES)
     print(versions_line(), flush=True)
     todo = [
         Job(family, i, level, noise)
-        for family in ("tile", "flat box", "bar")
+        for family in families
         for i in range(args.instances)
         for level in levels
         for noise in (0.0, NOISE)
@@ -122,7 +136,7 @@ def main(argv: list[str] | None = None) -> None:
     head = f"{'family':10s} {'level':>5s} {'exact':>7s} {'noisy':>7s}"
     print(head)
     print("-" * len(head))
-    for family in ("tile", "flat box", "bar"):
+    for family in families:
         for level in levels:
             cells = []
             for noisy in (False, True):
