@@ -105,6 +105,13 @@ _CORNER = "a corner juts out"
 _SPOT = "a face touched at one spot"
 _ROUNDED = "a second height on a rounded edge"
 _TESTS = (_PATH, _HINT, _CORNER, _SPOT, _ROUNDED)  # tests of the model, never holding it open
+_OPEN = "open towards"
+
+TOUCHED_OPEN = " (touched there; the planes touched do not close it)"
+"""Added to an open direction the completion names unreachable when a probe that way touched
+the object: the finger reached it there, and the planes still leave the envelope open (a star
+prism's faces each leave its other points outside, so none bounds it, though every contour
+closed round it)."""
 
 PATH_PROBES = 4
 """At most this many probes per exploration where a contour's path passed inside the model, or
@@ -1395,6 +1402,7 @@ class ModelCompleter:
         self.probes = 0
         self._last: tuple[str, ObjectModel] | None = None
         self._asked: dict[str, list[Probe]] = {}
+        self._touched: set[str] = set()  # open directions a probe touched the object in
 
     def _budget(self, record: ExplorationRecord, model: ObjectModel) -> tuple[int, float]:
         """The completion's touch and path budgets for ``record``."""
@@ -1424,6 +1432,8 @@ class ModelCompleter:
         """The next probe for ``record``, or how the completion ended."""
         if self._start is None:
             self._start = (record.touches, record.path_length)
+        if last is not None and last[1] and last[0].reason.startswith(_OPEN):
+            self._touched.add(last[0].reason)
         try:
             model = self._model(record)
         except _BUILD_ERRORS as exc:
@@ -1464,10 +1474,11 @@ class ModelCompleter:
                 if model.polyhedron is None
                 else "the model is closed but not every face was touched at two heights"
             )
+            items = [f"{i}{TOUCHED_OPEN}" if i in self._touched else i for i in open_items]
             return Ending(
                 "unreachable",
-                f"{what} after {record.touches} touches; unreachable: " + "; ".join(open_items),
-                tuple(open_items),
+                f"{what} after {record.touches} touches; unreachable: " + "; ".join(items),
+                tuple(items),
             )
         budget, allowed = self._budget(record, model)
         if touches >= budget or path >= allowed:

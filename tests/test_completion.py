@@ -15,7 +15,13 @@ from scanlike import bumped, jittered, rounded_box
 
 from tactile_kb import settings, solids
 from tactile_kb.cli import main
-from tactile_kb.completion import CompletionParams, completing, completion_probes, model_completer
+from tactile_kb.completion import (
+    TOUCHED_OPEN,
+    CompletionParams,
+    completing,
+    completion_probes,
+    model_completer,
+)
 from tactile_kb.features.builtin import centres_on_sphere
 from tactile_kb.geometry.model import build_model
 from tactile_kb.geometry.planes import SMOOTH_RHO, surface_detail
@@ -536,3 +542,39 @@ def test_a_box_is_not_ended_as_a_ball() -> None:
     assert rec.ending == "closed"
     assert len(model.contact_faces) == 5
     assert not centres_on_sphere(model)
+
+
+def _star_prism(points: int, outer: float, inner: float, height: float) -> trimesh.Trimesh:
+    """A prism on a star polygon (``points`` tips), built by hand: the star is star-shaped
+    about its centre, so each cap is a fan of triangles from the centre."""
+    angles = np.linspace(0.0, 2.0 * math.pi, 2 * points, endpoint=False)
+    radii = np.where(np.arange(2 * points) % 2 == 0, outer, inner)
+    ring = np.column_stack([radii * np.cos(angles), radii * np.sin(angles)])
+    k = len(ring)
+    vertices = np.vstack(
+        [np.column_stack([ring, np.zeros(k)]), np.column_stack([ring, np.full(k, height)])]
+    )
+    vertices = np.vstack([vertices, [[0.0, 0.0, 0.0], [0.0, 0.0, height]]])
+    faces = []
+    for i in range(k):
+        j = (i + 1) % k
+        faces += [[i, j, k + j], [i, k + j, k + i]]  # the side, outwards
+        faces += [[2 * k, j, i], [2 * k + 1, k + i, k + j]]  # the bottom and the top fans
+    mesh = trimesh.Trimesh(vertices, np.asarray(faces))
+    assert mesh.is_watertight
+    assert mesh.volume > 0
+    return mesh
+
+
+def test_an_open_direction_the_finger_touched_says_so() -> None:
+    # a five-pointed star prism: both contours close round it, but each face leaves the other
+    # tips outside its plane, so no face bounds the object sideways and the planes stay open
+    # there; the probes that way touch the object, and the ending says so rather than that
+    # the finger could not reach it
+    star = _star_prism(5, 0.05, 0.022, 0.03)
+    rec = completing(StepperExplorer()).explore(star, seed=0)
+    assert all(layer.closed for layer in rec.layers)
+    assert rec.ending == "unreachable"
+    sideways = [u for u in rec.unreachable if u.startswith("open towards (")]
+    assert sideways
+    assert all(u.endswith(TOUCHED_OPEN) for u in sideways)
