@@ -240,14 +240,10 @@ def completion_probes(model: ObjectModel, *, height_gap: float | None = None) ->
                 continue  # straight under the object: the table
             if d[2] > 0.9:
                 target = np.array([mid[0], mid[1], hi[2]])
-                probes.append(
-                    Probe(_v(target), (0.0, 0.0, 1.0), reach, "open towards +z", middle=True)
-                )
+                probes.append(Probe(_v(target), (0.0, 0.0, 1.0), reach, f"{_OPEN} +z", middle=True))
             else:
                 target = np.array([mid[0], mid[1], z_mid])
-                probes.append(
-                    Probe(_v(target), _v(d), reach, f"open towards {_name(d)}", middle=True)
-                )
+                probes.append(Probe(_v(target), _v(d), reach, f"{_OPEN} {_name(d)}", middle=True))
         probes += _far_closure_probes(model, rho)
         probes += _one_height_probes(model, centres, rho, gap)
         unique = {p.reason: p for p in reversed(probes)}  # the first of each direction
@@ -1547,9 +1543,9 @@ class ModelCompleter:
                 ends,
                 key=lambda p: min((math.dist(p.target, q.target) for q in before), default=0.0),
             )
-        if probe.reason == "open towards +z" and tried:
+        if probe.reason == f"{_OPEN} +z" and tried:
             return _over_the_rim(record, probe)
-        if probe.reason.startswith("open towards") and tried:
+        if probe.reason.startswith(_OPEN) and tried:
             return _at_the_far_touches(record, probe)
         if tried and last is not None and not last[1] and abs(probe.normal[2]) < 0.9:
             return _nearer_the_touches(record, probe)
