@@ -256,12 +256,85 @@ def _pooled_scatter(own: float, dof: int, surface: float) -> float:
     return math.sqrt((dof * own**2 + RELIEF_DOF * surface**2) / (dof + RELIEF_DOF))
 
 
+LINE_RHO = 2.0
+"""A face whose tip centres lie along one line (they span no plane) at least this many tip
+radii long knows its normal's turn about the line's perpendicular from the line's direction;
+only its turn about the line itself is the sensors' (:func:`_line_axes`)."""
+
+
+BOUND_SIGMAS = 2.0
+"""The sensors' bound on the turn of a face touched along one line about that line counts as
+this many standard errors (:func:`_tolerance`)."""
+
+
+def _line_axes(model: ObjectModel) -> tuple[FloatArray, FloatArray]:
+    """Per polyhedron face, ``(axes, across)``: for a face touched along one line (its tip
+    centres span no plane, the normal square to the line, the line at least :data:`LINE_RHO`
+    tip radii long), the line's unit direction, about which the normal turns by at most the
+    face's uncertainty (the sensors' resolution: a bound, the cone of the sensors), and the standard error (degrees) of its turn
+    about the other axis square to the normal, which the line's direction measures (the
+    centres' scatter across it over their spread along it, √m of them); zeros elsewhere.
+
+    A side of a slab touched along one contour line (a phone lying flat: its sides are 12 mm
+    tall) has a tilt the sensors know to 15° or 30°, but its direction round the vertical is
+    the line's, to a degree or better: it is parallel to the side opposite, not to the ones
+    beside it."""
+
+    def compute() -> tuple[FloatArray, FloatArray]:
+        n_faces = len(model.face_of)
+        axes, across = np.zeros((n_faces, 3)), np.zeros(n_faces)
+        contacts = model.record.contacts
+        rho = model.record.tip_radius
+        least = max(model.record.noise, PRECISION_RHO * rho)
+        for k, i in enumerate(model.face_of):
+            f = model.faces[i]
+            if f.refined or f.source != "contacts" or len(f.contacts) < 2:
+                continue
+            c = np.asarray([contacts[j].centre for j in f.contacts], dtype=float)
+            c -= c.mean(axis=0)
+            _, sv, vt = np.linalg.svd(c, full_matrices=False)
+            line = vt[0]
+            along = c @ line
+            if float(along.max() - along.min()) < LINE_RHO * rho:
+                continue
+            if abs(float(line @ np.asarray(f.normal, dtype=float))) > 0.1:
+                continue
+            m = max(f.places or len(f.contacts), 2)
+            scatter = max(float(sv[1]) / math.sqrt(len(c)), least) if len(sv) > 1 else least
+            spread = float(np.sqrt((along**2).mean()))
+            axes[k] = line
+            across[k] = math.degrees(math.atan2(scatter, spread * math.sqrt(m)))
+        return axes, across
+
+    return _derived(model, (__name__, current().features, "line_axes"), compute)
+
+
 def _tolerance(model: ObjectModel, tolerance_deg: float, sigmas: float) -> FloatArray:
-    """(F, F) angle tolerances: the larger of ``tolerance_deg`` and the combined uncertainty."""
+    """(F, F) angle tolerances: the larger of ``tolerance_deg`` and the combined uncertainty
+    of the two faces' normals about the axis square to both (the only turn that changes the
+    angle between them), each face's uncertainty the same about every axis but for a face
+    touched along one line (:func:`_line_axes`)."""
 
     def compute() -> FloatArray:
         u = _uncertainty(model)
-        comb = np.sqrt(u[:, None] ** 2 + u[None, :] ** 2)
+        axes, across = _line_axes(model)
+        var = np.broadcast_to((u**2)[:, None], (len(u), len(u))).copy()
+        lined = np.flatnonzero(np.abs(axes).sum(axis=1) > 0)
+        if len(lined):
+            normals = _poly(model, "tolerance").normals
+            k = np.cross(normals[:, None, :], normals[None, :, :])
+            size = np.linalg.norm(k, axis=2)
+            ok = size > 1e-6
+            k = np.where(ok[:, :, None], k / np.maximum(size, 1e-12)[:, :, None], 0.0)
+            for i in lined.tolist():
+                # the sensors' bound on the turn about the line (the spread of their cones)
+                # counts as BOUND_SIGMAS standard errors: a rough face's bumps turn them
+                # beyond it at times
+                along = (k[i] @ axes[i]) ** 2  # (F,): the axes' parts about the line
+                about = u[i] / BOUND_SIGMAS
+                turned = about**2 * along + across[i] ** 2 * (1.0 - along)
+                var[i] = np.where(ok[i], turned, var[i])
+        comb = np.sqrt(var + var.T)
         return np.asarray(np.maximum(tolerance_deg, sigmas * comb), dtype=float)
 
     return _derived(

@@ -162,6 +162,14 @@ TOP_UNDER_DEG = 70.0
 """A layer's touch whose followed direction points more than this below the equator met a top
 just under the tip's centre, not a side (see :meth:`Controller._top_met`)."""
 
+TOP_NEAR_RHO = 1.5
+"""A layer whose tip centre would lie within this many tip radii under the hint's top may run
+over the object's top: the top is explored first (:meth:`Controller._under_touched_top`)."""
+
+TOP_CLEAR_RHO = 0.5
+"""A layer placed under a top touched first runs this many tip radii under it: below the
+top's rounded edge (up to a tenth of a 1.5 cm side) and its bumps."""
+
 UNDER_TOP_RHO = 0.5
 """A layer lowered under a top it met runs this many tip radii below that top."""
 
@@ -456,6 +464,7 @@ class Controller:
         self._turning: _Turning | None = None  # how far the layer's contour has turned
         self._top_under: float | None = None  # a top met just under the layer (its height)
         self._lowered = False  # a layer was lowered under a top once
+        self._topped = False  # the top phase ran before the last layer
         self._layer_motions = 0
         self._blocked_end = False  # the current contour ended at a blocked slide
         self._phase = "first-contact"
@@ -713,20 +722,31 @@ class Controller:
                     if closed and not above:
                         self._note(f"stopped after {self.params.max_layers} layers")
                     break
-                nxt = self._z_increment(pos, follow, _centre(layer_contacts)) if closed else None
-                if nxt is None and z + self.z_step < top - self.rho:
+                step_z = z + self.z_step
+                under: float | None = None  # the next layer's height under a top touched first
+                if closed or blocked:
+                    under = self._under_touched_top(z, top, layer_contacts, whole=closed)
+                    if under is not None and under < z + self.bump:
+                        self._note(
+                            f"the top, touched at {under + TOP_CLEAR_RHO * self.rho:.4f} m, "
+                            f"leaves no room for a layer above z = {z:.4f} m"
+                        )
+                        break
+                    if under is not None:
+                        step_z = min(step_z, under)
+                # from the top just touched, the next layer is found by a new approach
+                nxt = (
+                    self._z_increment(pos, follow, _centre(layer_contacts))
+                    if closed and under is None
+                    else None
+                )
+                if nxt is None and step_z < top - self.rho:
                     # the contact was lost below the top of the visual estimate (a step up the
                     # object, as from an L-block's foot to its leg), or the contour ended at a
                     # blocked slide: a new first contact one z step up
-                    nxt = self._first_contact([z + self.z_step], quiet=True)
+                    nxt = self._first_contact([step_z], quiet=True)
                     if nxt is not None:
-                        self._note(
-                            f"the contour at z = {z:.4f} m ended open at a blocked slide: the "
-                            f"next plane, {z + self.z_step:.4f} m, was found by a new approach"
-                            if blocked
-                            else f"contact lost after the z increment to {z + self.z_step:.4f} m "
-                            "below the top of the visual estimate: found again by a new approach"
-                        )
+                        self._note(self._next_layer_note(z, step_z, under is not None, blocked))
                 if nxt is None:
                     break
                 pos, follow = nxt
@@ -736,7 +756,7 @@ class Controller:
             if self.params.probe:
                 self._phase = "probe"
                 _SideProbes(self).run(_centre(top_contacts))
-            if self.params.top:
+            if self.params.top and not self._topped:
                 self._phase = "top"
                 _TopPhase(self).run(top_contacts)
         except _Budget as exc:
@@ -1787,6 +1807,56 @@ class Controller:
         self._top_under = float(pos[2]) + self.rho * float(f.r0[2])
         return True
 
+    def _next_layer_note(self, z: float, step_z: float, topped: bool, blocked: bool) -> str:
+        """The note on a layer after ``z`` found by a new approach at ``step_z``: after the
+        top was touched first (``topped``), after a blocked slide, or after a z increment
+        that lost contact."""
+        if topped:
+            where = (
+                f"{TOP_CLEAR_RHO:g} ρ under the top touched first"
+                if step_z < z + self.z_step - 1e-9
+                else "found by a new approach after the top was touched first"
+            )
+            return f"the layer after z = {z:.4f} m runs at {step_z:.4f} m, {where}"
+        if blocked:
+            return (
+                f"the contour at z = {z:.4f} m ended open at a blocked slide: the next plane, "
+                f"{step_z:.4f} m, was found by a new approach"
+            )
+        return (
+            f"contact lost after the z increment to {step_z:.4f} m below the top of the visual "
+            "estimate: found again by a new approach"
+        )
+
+    def _under_touched_top(
+        self, z: float, top: float, contacts: list[Contact], *, whole: bool
+    ) -> float | None:
+        """The height of the layer after ``z`` when it may run over the object's top: the top
+        explored first (the top phase, over the middle of ``contacts``, the layer's, or, when
+        a blocked slide ended it short of ``whole``, over the hint's middle, which the part
+        of a contour may lie far from), the layer :data:`TOP_CLEAR_RHO` × ρ under it; None
+        when the next layer lies more than :data:`TOP_NEAR_RHO` × ρ under the hint's ``top``
+        (the visual estimate), or the top phase touched no top.
+
+        The hint is a few millimetres loose: on a slab (a phone, a book lying flat) the
+        layer one ``z_step`` up may run above the top's edge, and its touches of the edge
+        from above tilt the sides' planes by ten degrees and more."""
+        if not self.params.top or self._topped or z + self.z_step <= top - TOP_NEAR_RHO * self.rho:
+            return None
+        saved = self._phase, self._layer, self._layer_z, self._turning
+        self._phase, self._layer, self._layer_z, self._turning = "top", None, None, None
+        first = len(self.contacts)
+        middle = None if whole else np.asarray(self.world.hint.centre, dtype=float)
+        try:
+            _TopPhase(self).run(contacts, middle)
+        finally:
+            self._phase, self._layer, self._layer_z, self._turning = saved
+        heights = [c.centre[2] for c in self.contacts[first:] if c.phase == "top"]
+        if not heights:
+            return None  # no top there: the top phase runs again after the layers
+        self._topped = True
+        return float(np.median(heights)) - self.rho - TOP_CLEAR_RHO * self.rho
+
     def _lower_under_top(self, z: float) -> tuple[FloatArray, _Follow] | None:
         """After a layer at ``z`` that met a top just under the tip (:meth:`_top_met`): the
         first contact of a layer :data:`UNDER_TOP_RHO` × ρ under that top, found by a new
@@ -2045,8 +2115,9 @@ class _TopPhase:
         c = self._c
         return _Follow(self._down, tuple(sorted(m.closed)), c._dirs[self._down].copy())
 
-    def run(self, contacts: list[Contact]) -> None:
-        """Approach from above over the middle of the last contour; slide round a diamond on it.
+    def run(self, contacts: list[Contact], middle: FloatArray | None = None) -> None:
+        """Approach from above over the middle of the last contour (or over ``middle``, x–y,
+        when given); slide round a diamond on it.
 
         The diamond's corners lie on the contour's principal axes at ``top_spread`` × its
         half-widths, so that the tip centres on the top span it; then round a wider one
@@ -2065,7 +2136,7 @@ class _TopPhase:
         if len(contacts) < 2:
             return
         xy = np.asarray([c.centre[:2] for c in contacts], dtype=float)
-        mid = xy.mean(axis=0)
+        mid = xy.mean(axis=0) if middle is None else np.asarray(middle, dtype=float)[:2]
         _, _, vt = np.linalg.svd(xy - mid, full_matrices=False)
         half = np.abs((xy - mid) @ vt.T).max(axis=0) - c.rho
         reach = np.maximum(c.params.top_spread * half, 0.001)
