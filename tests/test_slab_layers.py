@@ -7,8 +7,8 @@ millimetres higher still), the second layer's tip centre ran at 14 mm, above the
 the tip touched the top's edge from above, its centres lay up to a millimetre inside the sides'
 planes, and the sides came out tilted by 3–15°: "a hexahedron but not a parallelepiped" on 9
 of 10 explorations. Now a layer that would run within ``TOP_NEAR_RHO`` tip radii of the
-estimate's top is placed ``TOP_CLEAR_RHO`` tip radii under the top, explored first
-(``Controller._under_touched_top``). Taller objects keep their layers as they were.
+estimate's top is placed ``TOP_CLEAR_RHO`` tip radii under the top, touched first from
+above (``Controller._under_touched_top``). Taller objects keep their layers as they were.
 
 The truth is the construction: the slab's 12 mm top, the box's 5 cm one, and their classes.
 """
@@ -41,11 +41,16 @@ def test_a_scanned_phones_layers_run_under_its_top(seed: int) -> None:
     # every layer's equator met the sides under the box's top (the scan's lies higher, by its
     # relief), none touched its edge from above
     assert max(c.centre[2] for c in layered) < PHONE[2]
-    # the top was explored before the second layer, and once
+    # the top was touched from above (a height, no contact: one touch cannot tell a top
+    # from an apex) before the second layer, and explored after the layers
+    touched = [n for n in record.notes if n.startswith("the top touched from above")]
+    assert len(touched) == 1
+    height = float(touched[0].split(": ")[1].split(" m")[0])
+    assert PHONE[2] < height < PHONE[2] + 0.004  # the scan's top, over its relief
     phases = [c.phase for c in record.contacts]
-    assert "top" in phases
-    last_top = max(i for i, p in enumerate(phases) if p == "top")
-    assert any(c.layer == 1 for c in record.contacts[last_top:])
+    second = min(i for i, c in enumerate(record.contacts) if c.layer == 1)
+    assert "top" not in phases[:second]
+    assert "top" in phases[second:]
     assert result.decision.label == "rectangular_parallelepiped"
 
 

@@ -164,11 +164,12 @@ just under the tip's centre, not a side (see :meth:`Controller._top_met`)."""
 
 TOP_NEAR_RHO = 1.5
 """A layer whose tip centre would lie within this many tip radii under the hint's top may run
-over the object's top: the top is explored first (:meth:`Controller._under_touched_top`)."""
+over the object's top: the top is touched first (:meth:`Controller._under_touched_top`)."""
 
 TOP_CLEAR_RHO = 0.5
 """A layer placed under a top touched first runs this many tip radii under it: below the
-top's rounded edge (up to a tenth of a 1.5 cm side) and its bumps."""
+top's rounded edge (up to a tenth of a 1.5 cm side) and its bumps (at 0.3 ρ the contour of a
+scanned phone's second layer was blocked there)."""
 
 UNDER_TOP_RHO = 0.5
 """A layer lowered under a top it met runs this many tip radii below that top."""
@@ -464,7 +465,7 @@ class Controller:
         self._turning: _Turning | None = None  # how far the layer's contour has turned
         self._top_under: float | None = None  # a top met just under the layer (its height)
         self._lowered = False  # a layer was lowered under a top once
-        self._topped = False  # the top phase ran before the last layer
+        self._top_touched = False  # the top was touched before the last layer
         self._layer_motions = 0
         self._blocked_end = False  # the current contour ended at a blocked slide
         self._phase = "first-contact"
@@ -756,7 +757,7 @@ class Controller:
             if self.params.probe:
                 self._phase = "probe"
                 _SideProbes(self).run(_centre(top_contacts))
-            if self.params.top and not self._topped:
+            if self.params.top:
                 self._phase = "top"
                 _TopPhase(self).run(top_contacts)
         except _Budget as exc:
@@ -1832,30 +1833,51 @@ class Controller:
         self, z: float, top: float, contacts: list[Contact], *, whole: bool
     ) -> float | None:
         """The height of the layer after ``z`` when it may run over the object's top: the top
-        explored first (the top phase, over the middle of ``contacts``, the layer's, or, when
-        a blocked slide ended it short of ``whole``, over the hint's middle, which the part
-        of a contour may lie far from), the layer :data:`TOP_CLEAR_RHO` × ρ under it; None
-        when the next layer lies more than :data:`TOP_NEAR_RHO` × ρ under the hint's ``top``
-        (the visual estimate), or the top phase touched no top.
+        touched first, from above the middle of ``contacts`` (the layer's; or, when a blocked
+        slide ended it short of ``whole``, the hint's middle, which the part of a contour
+        may lie far from), and the layer :data:`TOP_CLEAR_RHO` × ρ under it; None when the
+        next layer lies more than :data:`TOP_NEAR_RHO` × ρ under the hint's ``top`` (the
+        visual estimate), or the touch found no top there (once per exploration).
 
         The hint is a few millimetres loose: on a slab (a phone, a book lying flat) the
         layer one ``z_step`` up may run above the top's edge, and its touches of the edge
-        from above tilt the sides' planes by ten degrees and more."""
-        if not self.params.top or self._topped or z + self.z_step <= top - TOP_NEAR_RHO * self.rho:
+        from above tilt the sides' planes by ten degrees and more. A top is where a sensor
+        pointing more than :data:`TOP_UNDER_DEG` below the equator closes. The touch gives
+        a height, not a contact of the record: one touch from above cannot tell a top from
+        an apex (the top phase slides to tell them, and keeps no apex either), and a six-
+        sided pyramid's apex kept as a top's contact made it curved. The top phase still
+        runs after the layers, over the last contour, whose middle the top's is (a lying
+        prism's narrow top is not the lower contour's)."""
+        if (
+            not self.params.top
+            or self._top_touched
+            or z + self.z_step <= top - TOP_NEAR_RHO * self.rho
+        ):
+            return None
+        self._top_touched = True
+        if whole and contacts:
+            mid = np.asarray([c.centre[:2] for c in contacts], dtype=float).mean(axis=0)
+        else:
+            mid = np.asarray(self.world.hint.centre, dtype=float)[:2]
+        high = top + self.rho + self.params.approach_margin
+        start = (float(mid[0]), float(mid[1]), high)
+        if self.finger.nearest((0.0, 0.0, -1.0)) is None or not self.world.workspace.contains(
+            start
+        ):
             return None
         saved = self._phase, self._layer, self._layer_z, self._turning
         self._phase, self._layer, self._layer_z, self._turning = "top", None, None, None
-        first = len(self.contacts)
-        middle = None if whole else np.asarray(self.world.hint.centre, dtype=float)
         try:
-            _TopPhase(self).run(contacts, middle)
+            m = self._move(start, -_Z, high - self.rho)
+            f = self._follow(m.closed) if m.event == "touch" else None
+            if f is None or float(f.r0[2]) > -math.sin(math.radians(TOP_UNDER_DEG)):
+                self._note(f"the touch from above at {_fmt(start)} found no top ({m.event})")
+                return None
         finally:
             self._phase, self._layer, self._layer_z, self._turning = saved
-        heights = [c.centre[2] for c in self.contacts[first:] if c.phase == "top"]
-        if not heights:
-            return None  # no top there: the top phase runs again after the layers
-        self._topped = True
-        return float(np.median(heights)) - self.rho - TOP_CLEAR_RHO * self.rho
+        height = float(m.end[2]) - self.rho
+        self._note(f"the top touched from above at {_fmt(m.end)}: {height:.4f} m high")
+        return height - TOP_CLEAR_RHO * self.rho
 
     def _lower_under_top(self, z: float) -> tuple[FloatArray, _Follow] | None:
         """After a layer at ``z`` that met a top just under the tip (:meth:`_top_met`): the
@@ -2115,9 +2137,8 @@ class _TopPhase:
         c = self._c
         return _Follow(self._down, tuple(sorted(m.closed)), c._dirs[self._down].copy())
 
-    def run(self, contacts: list[Contact], middle: FloatArray | None = None) -> None:
-        """Approach from above over the middle of the last contour (or over ``middle``, x–y,
-        when given); slide round a diamond on it.
+    def run(self, contacts: list[Contact]) -> None:
+        """Approach from above over the middle of the last contour; slide round a diamond on it.
 
         The diamond's corners lie on the contour's principal axes at ``top_spread`` × its
         half-widths, so that the tip centres on the top span it; then round a wider one
@@ -2136,7 +2157,7 @@ class _TopPhase:
         if len(contacts) < 2:
             return
         xy = np.asarray([c.centre[:2] for c in contacts], dtype=float)
-        mid = xy.mean(axis=0) if middle is None else np.asarray(middle, dtype=float)[:2]
+        mid = xy.mean(axis=0)
         _, _, vt = np.linalg.svd(xy - mid, full_matrices=False)
         half = np.abs((xy - mid) @ vt.T).max(axis=0) - c.rho
         reach = np.maximum(c.params.top_spread * half, 0.001)
