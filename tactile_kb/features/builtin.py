@@ -271,9 +271,10 @@ def _line_axes(model: ObjectModel) -> tuple[FloatArray, FloatArray]:
     """Per polyhedron face, ``(axes, across)``: for a face touched along one line (its tip
     centres span no plane, the normal square to the line, the line at least :data:`LINE_RHO`
     tip radii long), the line's unit direction, about which the normal turns by at most the
-    face's uncertainty (the sensors' resolution: a bound, the cone of the sensors), and the standard error (degrees) of its turn
-    about the other axis square to the normal, which the line's direction measures (the
-    centres' scatter across it over their spread along it, √m of them); zeros elsewhere.
+    face's uncertainty (the sensors' resolution: a bound, the cone of the sensors), and the
+    standard error (degrees) of its turn about the other axis square to the normal, which
+    the line's direction measures (the centres' scatter across it over their spread along
+    it, √m of them); zeros elsewhere.
 
     A side of a slab touched along one contour line (a phone lying flat: its sides are 12 mm
     tall) has a tilt the sensors know to 15° or 30°, but its direction round the vertical is

@@ -1855,26 +1855,23 @@ class Controller:
         ):
             return None
         self._top_touched = True
-        if whole and contacts:
-            mid = np.asarray([c.centre[:2] for c in contacts], dtype=float).mean(axis=0)
-        else:
-            mid = np.asarray(self.world.hint.centre, dtype=float)[:2]
+        middle = _centre(contacts) if whole else None
+        mid = np.asarray(self.world.hint.centre if middle is None else middle, dtype=float)[:2]
         high = top + self.rho + self.params.approach_margin
         start = (float(mid[0]), float(mid[1]), high)
         if self.finger.nearest((0.0, 0.0, -1.0)) is None or not self.world.workspace.contains(
             start
         ):
             return None
-        saved = self._phase, self._layer, self._layer_z, self._turning
-        self._phase, self._layer, self._layer_z, self._turning = "top", None, None, None
+        saved, self._phase = self._phase, "top"  # no contact is recorded: the phase alone
         try:
             m = self._move(start, -_Z, high - self.rho)
-            f = self._follow(m.closed) if m.event == "touch" else None
-            if f is None or float(f.r0[2]) > -math.sin(math.radians(TOP_UNDER_DEG)):
-                self._note(f"the touch from above at {_fmt(start)} found no top ({m.event})")
-                return None
         finally:
-            self._phase, self._layer, self._layer_z, self._turning = saved
+            self._phase = saved
+        f = self._follow(m.closed) if m.event == "touch" else None
+        if f is None or float(f.r0[2]) > -math.sin(math.radians(TOP_UNDER_DEG)):
+            self._note(f"the touch from above at {_fmt(start)} found no top ({m.event})")
+            return None
         height = float(m.end[2]) - self.rho
         self._note(f"the top touched from above at {_fmt(m.end)}: {height:.4f} m high")
         return height - TOP_CLEAR_RHO * self.rho
